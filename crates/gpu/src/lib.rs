@@ -1,0 +1,1 @@
+//! Headless wgpu layer of caustics-bench: adapter choice, scene upload, G-buffers, direct lighting, instrumentation, readback.

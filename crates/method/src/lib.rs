@@ -1,0 +1,1 @@
+//! The method contract of caustics-bench: the trait every caustics method implements, its parameters, counters and capabilities.
