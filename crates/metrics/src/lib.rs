@@ -1,1 +1,50 @@
-//! Image I/O (EXR, PNG), tone mapping, heatmaps and error metrics (RMSE, relMSE, PSNR, SSIM, FLIP) for caustics-bench.
+//! Image I/O (EXR, PNG), tone mapping, heatmaps and error metrics (RMSE, relMSE, PSNR,
+//! SSIM, FLIP) for caustics-bench.
+//!
+//! Images are linear HDR radiance ([`HdrImage`], W·m⁻²·sr⁻¹, row 0 at the top). Every
+//! metric compares a *test* image against a *reference* and refuses (returns an error
+//! naming the image and the first bad pixel) when the sizes differ or either image holds a
+//! NaN or an infinity, so a broken method can never score a number.
+//!
+//! ```
+//! use caustics_metrics::{all_errors, HdrImage, ToneMap};
+//!
+//! let mut reference = HdrImage::new(16, 16);
+//! reference.set(8, 8, [1.0, 0.5, 0.25]);
+//! let test = reference.scaled(0.5);
+//! let tone = ToneMap::fit_percentile(&reference, 0.99);
+//! let e = all_errors(&test, &reference, &tone)?;
+//! assert!((e.best_scale - 2.0).abs() < 1e-9);
+//! assert!(e.rmse_after_best_scale < 1e-9);
+//! # Ok::<(), caustics_metrics::MetricsError>(())
+//! ```
+//!
+//! Files are written atomically ([`atomic_write`]): readers never see a partial EXR, PNG
+//! or result file.
+
+mod colormap;
+mod error;
+mod error_metrics;
+mod flip;
+mod font;
+mod heatmap;
+mod image;
+mod io;
+mod ssim;
+mod tonemap;
+
+pub use crate::colormap::inferno;
+pub use crate::error::MetricsError;
+pub use crate::error_metrics::{
+    Errors, REL_MSE_EPS, all_errors, best_scale, check_pair, psnr, rel_mse, rmse,
+};
+pub use crate::flip::{FLIP_PIXELS_PER_DEGREE, flip, flip_map};
+pub use crate::heatmap::{
+    COLOR_BAR_WIDTH, HeatmapOptions, Histogram, HistogramBucket, MIN_MAP_HEIGHT, PANEL_BACKGROUND,
+    ZERO_COUNT_COLOUR, error_map, error_map_with_max, format_count, format_value, heatmap,
+    heatmap_with, histogram,
+};
+pub use crate::image::{HdrImage, REC709_LUMINANCE, Rgb8Image, luminance};
+pub use crate::io::{atomic_write, atomic_write_with, read_exr, read_png, write_exr, write_png};
+pub use crate::ssim::ssim;
+pub use crate::tonemap::{ToneMap, srgb_oetf};

@@ -1,0 +1,208 @@
+//! Pixel-wise error metrics against a reference: RMSE, relMSE, PSNR, best scale, and the
+//! bundle [`Errors`] that result files store.
+
+use serde::{Deserialize, Serialize};
+
+use crate::{HdrImage, MetricsError, ToneMap};
+
+/// Default `eps` of [`rel_mse`]: `1e-2` (W·m⁻²·sr⁻¹)², i.e. errors in pixels darker than
+/// about 0.1 W·m⁻²·sr⁻¹ are weighted as absolute rather than relative errors.
+pub const REL_MSE_EPS: f64 = 1e-2;
+
+/// Validates a (test, reference) pair: same size, at least one pixel, all values finite.
+///
+/// Every metric calls this first, so none ever turns a NaN or a size mismatch into a number.
+pub fn check_pair(test: &HdrImage, reference: &HdrImage) -> Result<(), MetricsError> {
+    reference.check_same_size(test, "test vs reference")?;
+    if test.pixels.is_empty() {
+        return Err(MetricsError::Empty {
+            what: "test vs reference".to_owned(),
+            width: test.width,
+            height: test.height,
+        });
+    }
+    for (img, what) in [(test, "test"), (reference, "reference")] {
+        if img.pixels.len() != crate::image::pixel_count(img.width, img.height) {
+            return Err(MetricsError::BufferLength {
+                what: format!("{what} image pixels ({}x{})", img.width, img.height),
+                expected: crate::image::pixel_count(img.width, img.height),
+                actual: img.pixels.len(),
+            });
+        }
+    }
+    test.check_finite("test")?;
+    reference.check_finite("reference")
+}
+
+/// Mean over all pixels and channels of `f(t, r)`, in `f64`.
+fn mean_over_channels(test: &HdrImage, reference: &HdrImage, f: impl Fn(f64, f64) -> f64) -> f64 {
+    let mut sum = 0.0;
+    for (t, r) in test.pixels.iter().zip(&reference.pixels) {
+        for c in 0..3 {
+            sum += f(f64::from(t[c]), f64::from(r[c]));
+        }
+    }
+    sum / (3 * test.pixels.len()) as f64
+}
+
+fn mse(test: &HdrImage, reference: &HdrImage) -> f64 {
+    mean_over_channels(test, reference, |t, r| (t - r) * (t - r))
+}
+
+/// Root-mean-square error over all pixels and all three channels, in W·m⁻²·sr⁻¹.
+pub fn rmse(test: &HdrImage, reference: &HdrImage) -> Result<f64, MetricsError> {
+    check_pair(test, reference)?;
+    Ok(mse(test, reference).sqrt())
+}
+
+/// Relative mean squared error `mean((t − r)² / (r² + eps))` over all pixels and channels.
+///
+/// `eps > 0` keeps black reference pixels from dividing by zero; use [`REL_MSE_EPS`]
+/// (`1e-2`) unless a study states otherwise. It is in squared radiance units, so it
+/// should be scaled with the square of the scene's radiance range.
+pub fn rel_mse(test: &HdrImage, reference: &HdrImage, eps: f64) -> Result<f64, MetricsError> {
+    if !(eps > 0.0 && eps.is_finite()) {
+        return Err(MetricsError::InvalidParameter {
+            name: "eps",
+            message: format!("must be positive and finite, got {eps}"),
+        });
+    }
+    check_pair(test, reference)?;
+    Ok(mean_over_channels(test, reference, |t, r| {
+        (t - r) * (t - r) / (r * r + eps)
+    }))
+}
+
+/// Peak signal-to-noise ratio in dB: `10 log10(peak² / MSE)`, MSE over all channels.
+///
+/// `peak` defaults to the largest channel value of the reference. Identical images
+/// (MSE = 0) give `f64::INFINITY`. Fails with [`MetricsError::InvalidParameter`] when the
+/// peak is not positive (e.g. a black reference and no explicit peak).
+pub fn psnr(test: &HdrImage, reference: &HdrImage, peak: Option<f64>) -> Result<f64, MetricsError> {
+    check_pair(test, reference)?;
+    let peak = peak.unwrap_or_else(|| f64::from(reference.max_value()));
+    if !(peak > 0.0 && peak.is_finite()) {
+        return Err(MetricsError::InvalidParameter {
+            name: "peak",
+            message: format!(
+                "must be positive and finite, got {peak} (a black reference needs an explicit peak)"
+            ),
+        });
+    }
+    let mse = mse(test, reference);
+    if mse == 0.0 {
+        return Ok(f64::INFINITY);
+    }
+    Ok(10.0 * (peak * peak / mse).log10())
+}
+
+/// The scale `s` minimising `Σ (s·t − r)²` over all pixels and channels, and the RMSE of
+/// `s·t` against `r`.
+///
+/// `s = Σ t·r / Σ t²`. It separates "wrong overall brightness" (e.g. a missing factor of π)
+/// from "wrong shape" of a caustic. If the test image is entirely black every scale fits
+/// equally; `s = 1` is returned and the RMSE is the plain RMSE.
+pub fn best_scale(test: &HdrImage, reference: &HdrImage) -> Result<(f64, f64), MetricsError> {
+    check_pair(test, reference)?;
+    let mut tt = 0.0f64;
+    let mut tr = 0.0f64;
+    for (t, r) in test.pixels.iter().zip(&reference.pixels) {
+        for c in 0..3 {
+            let (t, r) = (f64::from(t[c]), f64::from(r[c]));
+            tt += t * t;
+            tr += t * r;
+        }
+    }
+    let s = if tt > 0.0 { tr / tt } else { 1.0 };
+    let err = mean_over_channels(test, reference, |t, r| (s * t - r) * (s * t - r)).sqrt();
+    Ok((s, err))
+}
+
+/// Every error metric of one test image against its reference, as stored in result files.
+///
+/// `psnr_db` is `+inf` for identical images; since JSON has no infinity it is serialized as
+/// the string `"inf"` (and `"-inf"`, `"nan"`), and a number or such a string is accepted
+/// when reading.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Errors {
+    /// [`rmse`], W·m⁻²·sr⁻¹.
+    pub rmse: f64,
+    /// [`rel_mse`] with `eps = REL_MSE_EPS`.
+    pub rel_mse: f64,
+    /// [`psnr`] with the reference's maximum as peak, dB.
+    #[serde(with = "non_finite_f64")]
+    pub psnr_db: f64,
+    /// [`ssim`](crate::ssim) on luminance, in `[-1, 1]`, 1 = identical.
+    pub ssim: f64,
+    /// Mean [`flip`](crate::flip) of the tone-mapped images, in `[0, 1]`, 0 = identical.
+    pub flip: f64,
+    /// The first value of [`best_scale`].
+    pub best_scale: f64,
+    /// The second value of [`best_scale`], W·m⁻²·sr⁻¹.
+    pub rmse_after_best_scale: f64,
+}
+
+/// Computes every metric of [`Errors`]; `tone` is the tone mapping used for FLIP.
+pub fn all_errors(
+    test: &HdrImage,
+    reference: &HdrImage,
+    tone: &ToneMap,
+) -> Result<Errors, MetricsError> {
+    check_pair(test, reference)?;
+    let (best_scale, rmse_after_best_scale) = best_scale(test, reference)?;
+    Ok(Errors {
+        rmse: rmse(test, reference)?,
+        rel_mse: rel_mse(test, reference, REL_MSE_EPS)?,
+        psnr_db: psnr(test, reference, None)?,
+        ssim: crate::ssim(test, reference)?,
+        flip: crate::flip(test, reference, tone)?,
+        best_scale,
+        rmse_after_best_scale,
+    })
+}
+
+/// Serde helper writing non-finite `f64` values as the strings `"inf"`, `"-inf"`, `"nan"`.
+mod non_finite_f64 {
+    use serde::de::{self, Visitor};
+    use serde::{Deserializer, Serializer};
+
+    pub(super) fn serialize<S: Serializer>(v: &f64, s: S) -> Result<S::Ok, S::Error> {
+        if v.is_finite() {
+            s.serialize_f64(*v)
+        } else if v.is_nan() {
+            s.serialize_str("nan")
+        } else if *v > 0.0 {
+            s.serialize_str("inf")
+        } else {
+            s.serialize_str("-inf")
+        }
+    }
+
+    pub(super) fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+        struct V;
+        impl Visitor<'_> for V {
+            type Value = f64;
+            fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                f.write_str("a number or one of \"inf\", \"-inf\", \"nan\"")
+            }
+            fn visit_f64<E: de::Error>(self, v: f64) -> Result<f64, E> {
+                Ok(v)
+            }
+            fn visit_i64<E: de::Error>(self, v: i64) -> Result<f64, E> {
+                Ok(v as f64)
+            }
+            fn visit_u64<E: de::Error>(self, v: u64) -> Result<f64, E> {
+                Ok(v as f64)
+            }
+            fn visit_str<E: de::Error>(self, v: &str) -> Result<f64, E> {
+                match v {
+                    "inf" | "+inf" | "infinity" => Ok(f64::INFINITY),
+                    "-inf" | "-infinity" => Ok(f64::NEG_INFINITY),
+                    "nan" => Ok(f64::NAN),
+                    other => Err(E::invalid_value(de::Unexpected::Str(other), &self)),
+                }
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
