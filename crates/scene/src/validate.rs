@@ -1,0 +1,514 @@
+//! From the raw file to the typed [`Scene`]: every check of DESIGN.md's scene format,
+//! each error naming the exact JSON path of the bad value.
+
+use std::path::Path;
+
+use glam::{Vec2, Vec3};
+
+use crate::light::{Light, Material, Medium, NamedMaterial};
+use crate::mesh::{MeshTransform, load_gltf, load_obj};
+use crate::raw::{self, RawLight, RawMaterial, RawScene, RawShape, Source};
+use crate::shape::{Heightfield, Shape, Wave};
+use crate::{Camera, Object, Scene, SceneError};
+
+/// Largest image side and heightfield resolution accepted.
+pub(crate) const MAX_IMAGE_SIDE: u32 = 16384;
+/// Largest heightfield vertex count per axis.
+pub(crate) const MAX_RESOLUTION: u32 = 4096;
+
+/// Parses and validates a whole document.
+pub(crate) fn parse(text: &str, file: &Path, base_dir: &Path) -> Result<Scene, SceneError> {
+    let src = Source { file, text };
+    let raw = src.parse_scene()?;
+    Builder {
+        src: &src,
+        base_dir,
+    }
+    .build(raw)
+}
+
+struct Builder<'a> {
+    src: &'a Source<'a>,
+    base_dir: &'a Path,
+}
+
+fn fmt_list(v: &[f32]) -> String {
+    let parts: Vec<String> = v.iter().map(|x| x.to_string()).collect();
+    format!("[{}]", parts.join(", "))
+}
+
+impl Builder<'_> {
+    fn err(&self, path: impl Into<String>, message: impl Into<String>) -> SceneError {
+        SceneError::Invalid {
+            file: self.src.file.to_path_buf(),
+            json_path: path.into(),
+            message: message.into(),
+        }
+    }
+
+    fn finite(&self, path: &str, x: f32) -> Result<f32, SceneError> {
+        if x.is_finite() {
+            Ok(x)
+        } else {
+            Err(self.err(path, format!("expected a finite number, got {x}")))
+        }
+    }
+
+    fn positive(&self, path: &str, x: f32) -> Result<f32, SceneError> {
+        if self.finite(path, x)? > 0.0 {
+            Ok(x)
+        } else {
+            Err(self.err(path, format!("expected a positive number, got {x}")))
+        }
+    }
+
+    fn non_negative(&self, path: &str, x: f32) -> Result<f32, SceneError> {
+        if self.finite(path, x)? >= 0.0 {
+            Ok(x)
+        } else {
+            Err(self.err(path, format!("expected a non-negative number, got {x}")))
+        }
+    }
+
+    fn each<const N: usize>(
+        &self,
+        path: &str,
+        v: [f32; N],
+        check: impl Fn(&Self, &str, f32) -> Result<f32, SceneError>,
+    ) -> Result<[f32; N], SceneError> {
+        for (i, &x) in v.iter().enumerate() {
+            check(self, &format!("{path}[{i}]"), x)?;
+        }
+        Ok(v)
+    }
+
+    fn point(&self, path: &str, v: [f32; 3]) -> Result<Vec3, SceneError> {
+        self.each(path, v, Self::finite).map(Vec3::from)
+    }
+
+    fn non_negative3(&self, path: &str, v: [f32; 3]) -> Result<Vec3, SceneError> {
+        self.each(path, v, Self::non_negative).map(Vec3::from)
+    }
+
+    fn unit_interval3(&self, path: &str, v: [f32; 3]) -> Result<Vec3, SceneError> {
+        self.each(path, v, |s, p, x| {
+            if (0.0..=1.0).contains(&s.finite(p, x)?) {
+                Ok(x)
+            } else {
+                Err(s.err(p, format!("expected a value in [0, 1], got {x}")))
+            }
+        })
+        .map(Vec3::from)
+    }
+
+    fn direction3(&self, path: &str, v: [f32; 3]) -> Result<Vec3, SceneError> {
+        let d = self.point(path, v)?;
+        d.try_normalize().ok_or_else(|| {
+            self.err(
+                path,
+                format!("expected a non-zero direction vector, got {}", fmt_list(&v)),
+            )
+        })
+    }
+
+    fn direction2(&self, path: &str, v: [f32; 2]) -> Result<Vec2, SceneError> {
+        let d = Vec2::from(self.each(path, v, Self::finite)?);
+        d.try_normalize().ok_or_else(|| {
+            self.err(
+                path,
+                format!("expected a non-zero direction vector, got {}", fmt_list(&v)),
+            )
+        })
+    }
+
+    fn build(&self, raw: RawScene<'_>) -> Result<Scene, SceneError> {
+        if raw.name.trim().is_empty() {
+            return Err(self.err("name", "expected a non-empty scene name"));
+        }
+        let camera = self.camera(&raw.camera)?;
+        if raw.lights.is_empty() {
+            return Err(self.err("lights", "expected at least one light"));
+        }
+        let mut lights = Vec::with_capacity(raw.lights.len());
+        for (i, l) in raw.lights.iter().enumerate() {
+            let path = format!("lights[{i}]");
+            let parsed = RawLight::parse(self.src, l, &path)?;
+            lights.push(self.light(&path, parsed)?);
+        }
+        let medium = raw.medium.as_ref().map(|m| self.medium(m)).transpose()?;
+        let mut materials = Vec::with_capacity(raw.materials.0.len());
+        for (name, m) in &raw.materials.0 {
+            let path = format!("materials.{name}");
+            if name.is_empty() {
+                return Err(self.err("materials", "expected non-empty material names"));
+            }
+            let parsed = RawMaterial::parse(self.src, m, &path)?;
+            materials.push(NamedMaterial {
+                name: name.clone(),
+                material: self.material(&path, parsed)?,
+            });
+        }
+        if raw.objects.is_empty() {
+            return Err(self.err("objects", "expected at least one object"));
+        }
+        let mut objects = Vec::with_capacity(raw.objects.len());
+        for (i, o) in raw.objects.iter().enumerate() {
+            self.object(i, o, &mut materials, &mut objects)?;
+        }
+        Ok(Scene {
+            name: raw.name,
+            description: raw.description.unwrap_or_default(),
+            source: self.src.file.to_path_buf(),
+            camera,
+            lights,
+            medium,
+            materials,
+            objects,
+        })
+    }
+
+    fn camera(&self, c: &raw::RawCamera) -> Result<Camera, SceneError> {
+        let eye = self.point("camera.eye", c.eye)?;
+        let target = self.point("camera.target", c.target)?;
+        let up = self.direction3("camera.up", c.up)?;
+        let fov = self.finite("camera.fov_y_deg", c.fov_y_deg)?;
+        if !(fov > 0.0 && fov < 180.0) {
+            return Err(self.err(
+                "camera.fov_y_deg",
+                format!("expected an angle in degrees in (0, 180), got {fov}"),
+            ));
+        }
+        for (path, v) in [("camera.width", c.width), ("camera.height", c.height)] {
+            if !(1..=MAX_IMAGE_SIDE).contains(&v) {
+                return Err(self.err(
+                    path,
+                    format!("expected a size in pixels in 1..={MAX_IMAGE_SIDE}, got {v}"),
+                ));
+            }
+        }
+        let Some(forward) = (target - eye).try_normalize() else {
+            return Err(self.err(
+                "camera.target",
+                "expected a point different from camera.eye",
+            ));
+        };
+        if forward.cross(up).length() < 1e-4 {
+            return Err(self.err(
+                "camera.up",
+                format!(
+                    "expected a direction not parallel to the view direction (target - eye), got {}",
+                    fmt_list(&c.up)
+                ),
+            ));
+        }
+        Ok(Camera {
+            eye,
+            target,
+            up,
+            fov_y_deg: fov,
+            width: c.width,
+            height: c.height,
+        })
+    }
+
+    fn light(&self, path: &str, l: RawLight) -> Result<Light, SceneError> {
+        let p = |field: &str| format!("{path}.{field}");
+        Ok(match l {
+            RawLight::Directional(d) => Light::Directional {
+                direction: self.direction3(&p("direction"), d.direction)?,
+                irradiance: self.non_negative3(&p("irradiance"), d.irradiance)?,
+            },
+            RawLight::Point(d) => Light::Point {
+                position: self.point(&p("position"), d.position)?,
+                intensity: self.non_negative3(&p("intensity"), d.intensity)?,
+            },
+            RawLight::Spot(d) => {
+                let position = self.point(&p("position"), d.position)?;
+                let direction = self.direction3(&p("direction"), d.direction)?;
+                let intensity = self.non_negative3(&p("intensity"), d.intensity)?;
+                let cone = self.finite(&p("cone_deg"), d.cone_deg)?;
+                if !(cone > 0.0 && cone <= 90.0) {
+                    return Err(self.err(
+                        p("cone_deg"),
+                        format!("expected a half angle in degrees in (0, 90], got {cone}"),
+                    ));
+                }
+                if let Some(f) = d.falloff_deg {
+                    let f = self.finite(&p("falloff_deg"), f)?;
+                    if !(0.0..=cone).contains(&f) {
+                        return Err(self.err(
+                            p("falloff_deg"),
+                            format!(
+                                "expected an angle in degrees in [0, cone_deg = {cone}], got {f}"
+                            ),
+                        ));
+                    }
+                }
+                Light::Spot {
+                    position,
+                    direction,
+                    intensity,
+                    cone_deg: cone,
+                    falloff_deg: d.falloff_deg,
+                }
+            }
+        })
+    }
+
+    fn medium(&self, m: &raw::RawMedium) -> Result<Medium, SceneError> {
+        let sigma_s = self.non_negative3("medium.sigma_s", m.sigma_s)?;
+        let sigma_a = self.non_negative3("medium.sigma_a", m.sigma_a)?;
+        let g = self.finite("medium.g", m.g)?;
+        if !(g > -1.0 && g < 1.0) {
+            return Err(self.err("medium.g", format!("expected a value in (-1, 1), got {g}")));
+        }
+        Ok(Medium {
+            sigma_s,
+            sigma_a,
+            g,
+        })
+    }
+
+    fn material(&self, path: &str, m: RawMaterial) -> Result<Material, SceneError> {
+        Ok(match m {
+            RawMaterial::Diffuse(d) => Material::Diffuse {
+                albedo: self.unit_interval3(&format!("{path}.albedo"), d.albedo)?,
+            },
+            RawMaterial::Dielectric(d) => Material::Dielectric {
+                ior: self.ior(&format!("{path}.ior"), d.ior)?,
+            },
+            RawMaterial::Mirror(d) => Material::Mirror {
+                reflectance: self.unit_interval3(&format!("{path}.reflectance"), d.reflectance)?,
+            },
+        })
+    }
+
+    fn ior(&self, path: &str, ior: f32) -> Result<f32, SceneError> {
+        if self.finite(path, ior)? >= 1.0 {
+            Ok(ior)
+        } else {
+            Err(self.err(
+                path,
+                format!("expected an index of refraction >= 1, got {ior}"),
+            ))
+        }
+    }
+
+    fn object(
+        &self,
+        i: usize,
+        o: &raw::RawObject<'_>,
+        materials: &mut Vec<NamedMaterial>,
+        objects: &mut Vec<Object>,
+    ) -> Result<(), SceneError> {
+        let path = format!("objects[{i}].shape");
+        let p = |field: &str| format!("{path}.{field}");
+        let shape = match RawShape::parse(self.src, o.shape, &path)? {
+            RawShape::Sphere(s) => Shape::Sphere {
+                center: self.point(&p("center"), s.center)?,
+                radius: self.positive(&p("radius"), s.radius)?,
+            },
+            RawShape::Quad(s) => Shape::Quad {
+                center: self.point(&p("center"), s.center)?,
+                normal: self.direction3(&p("normal"), s.normal)?,
+                size: Vec2::from(self.each(&p("size"), s.size, Self::positive)?),
+            },
+            RawShape::Heightfield(s) => Shape::Heightfield(self.heightfield(&path, s)?),
+            RawShape::Cylinder(s) => Shape::Cylinder {
+                center: self.point(&p("center"), s.center)?,
+                axis: self.direction3(&p("axis"), s.axis)?,
+                radius: self.positive(&p("radius"), s.radius)?,
+                height: self.positive(&p("height"), s.height)?,
+            },
+            RawShape::Mesh(m) => return self.mesh(i, &path, m, o, materials, objects),
+        };
+        let material = self.material_ref(i, o, materials)?;
+        objects.push(Object { shape, material });
+        Ok(())
+    }
+
+    /// The index of the material an object names.
+    fn material_ref(
+        &self,
+        i: usize,
+        o: &raw::RawObject<'_>,
+        materials: &[NamedMaterial],
+    ) -> Result<usize, SceneError> {
+        let path = format!("objects[{i}].material");
+        let Some(name) = &o.material else {
+            return Err(self.err(
+                path,
+                "missing material name (required for every shape except glTF meshes)",
+            ));
+        };
+        materials
+            .iter()
+            .position(|m| &m.name == name)
+            .ok_or_else(|| {
+                let names: Vec<&str> = materials.iter().map(|m| m.name.as_str()).collect();
+                self.err(
+                    path,
+                    format!(
+                        "unknown material `{name}`; defined materials: {}",
+                        if names.is_empty() {
+                            "(none)".to_string()
+                        } else {
+                            names.join(", ")
+                        }
+                    ),
+                )
+            })
+    }
+
+    fn heightfield(&self, path: &str, s: raw::RawHeightfield) -> Result<Heightfield, SceneError> {
+        let p = |field: &str| format!("{path}.{field}");
+        let center = self.point(&p("center"), s.center)?;
+        let size = Vec2::from(self.each(&p("size"), s.size, Self::positive)?);
+        for (k, &r) in s.resolution.iter().enumerate() {
+            if !(2..=MAX_RESOLUTION).contains(&r) {
+                return Err(self.err(
+                    format!("{path}.resolution[{k}]"),
+                    format!("expected a vertex count in 2..={MAX_RESOLUTION}, got {r}"),
+                ));
+            }
+        }
+        let mut waves = Vec::with_capacity(s.waves.len());
+        for (k, w) in s.waves.iter().enumerate() {
+            let wp = |field: &str| format!("{path}.waves[{k}].{field}");
+            waves.push(Wave {
+                amplitude: self.non_negative(&wp("amplitude"), w.amplitude)?,
+                wavelength: self.positive(&wp("wavelength"), w.wavelength)?,
+                direction: self.direction2(&wp("direction"), w.direction)?,
+                phase: self.finite(&wp("phase"), w.phase)?,
+            });
+        }
+        Ok(Heightfield {
+            center,
+            size,
+            resolution: s.resolution,
+            waves,
+        })
+    }
+
+    fn mesh(
+        &self,
+        i: usize,
+        path: &str,
+        m: raw::RawMesh,
+        o: &raw::RawObject<'_>,
+        materials: &mut Vec<NamedMaterial>,
+        objects: &mut Vec<Object>,
+    ) -> Result<(), SceneError> {
+        let xf = match &m.transform {
+            None => MeshTransform::default(),
+            Some(t) => {
+                let tp = |field: &str| format!("{path}.transform.{field}");
+                MeshTransform {
+                    translate: self.point(&tp("translate"), t.translate)?,
+                    rotate_deg: self.point(&tp("rotate_deg"), t.rotate_deg)?,
+                    scale: self.positive(&tp("scale"), t.scale)?,
+                }
+            }
+        };
+        let path_field = format!("{path}.path");
+        let mesh_file = self.base_dir.join(&m.path);
+        let mesh_err = |reason: String| SceneError::Mesh {
+            file: self.src.file.to_path_buf(),
+            json_path: path_field.clone(),
+            mesh_file: mesh_file.clone(),
+            reason,
+        };
+        if !mesh_file.is_file() {
+            return Err(mesh_err("the file does not exist".into()));
+        }
+        let ext = mesh_file
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase)
+            .unwrap_or_default();
+        match ext.as_str() {
+            "obj" => {
+                let material = self.material_ref(i, o, materials)?;
+                let mesh = load_obj(&mesh_file, &xf.matrix()).map_err(mesh_err)?;
+                objects.push(Object {
+                    shape: Shape::Mesh(mesh),
+                    material,
+                });
+            }
+            "gltf" | "glb" => {
+                let given = match o.material {
+                    Some(_) => Some(self.material_ref(i, o, materials)?),
+                    None => None,
+                };
+                let prims = load_gltf(&mesh_file, &xf.matrix()).map_err(mesh_err)?;
+                let stem = mesh_file
+                    .file_stem()
+                    .map(|s| s.to_string_lossy().into_owned())
+                    .unwrap_or_default();
+                for prim in prims {
+                    let material = match given {
+                        Some(m) => m,
+                        None => {
+                            let (index, name, material) = prim.material;
+                            let label = match (name, index) {
+                                (Some(n), _) if !n.is_empty() => n,
+                                (_, Some(k)) => k.to_string(),
+                                _ => "default".into(),
+                            };
+                            check_derived(&material).map_err(mesh_err)?;
+                            add_material(materials, format!("{stem}/{label}"), material)
+                        }
+                    };
+                    objects.push(Object {
+                        shape: Shape::Mesh(prim.mesh),
+                        material,
+                    });
+                }
+            }
+            other => {
+                return Err(mesh_err(format!(
+                    "unsupported mesh format `.{other}`; expected .obj, .gltf or .glb"
+                )));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A material derived from a glTF file must satisfy the same ranges as one written in
+/// the scene file.
+fn check_derived(m: &Material) -> Result<(), String> {
+    let in_unit = |v: Vec3| v.is_finite() && v.cmpge(Vec3::ZERO).all() && v.cmple(Vec3::ONE).all();
+    match m {
+        Material::Dielectric { ior } if !(ior.is_finite() && *ior >= 1.0) => Err(format!(
+            "material with KHR_materials_ior {ior}: expected >= 1"
+        )),
+        Material::Diffuse { albedo: c } | Material::Mirror { reflectance: c } if !in_unit(*c) => {
+            Err(format!("material base colour {c} outside [0, 1]"))
+        }
+        _ => Ok(()),
+    }
+}
+
+/// Appends a material derived from a file, reusing an identical one of the same name;
+/// a different material of the same name gets the suffix `#2`, `#3`, …
+fn add_material(materials: &mut Vec<NamedMaterial>, name: String, material: Material) -> usize {
+    let mut candidate = name.clone();
+    let mut k = 1;
+    loop {
+        match materials.iter().position(|m| m.name == candidate) {
+            Some(idx) if materials[idx].material == material => return idx,
+            Some(_) => {
+                k += 1;
+                candidate = format!("{name}#{k}");
+            }
+            None => {
+                materials.push(NamedMaterial {
+                    name: candidate,
+                    material,
+                });
+                return materials.len() - 1;
+            }
+        }
+    }
+}
