@@ -1,1 +1,171 @@
-fn main() {}
+//! `caustics`: render caustic scenes with real-time methods, measure and score them.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use anyhow::Result;
+use caustics::run::{EXIT_SKIPPED, RunOptions, RunOutcome};
+use caustics::{registry, run};
+use clap::{Parser, Subcommand};
+
+#[derive(Parser)]
+#[command(
+    name = "caustics",
+    version,
+    about = "Render, measure and score real-time caustics methods"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// List the built-in scenes and the methods with their parameters and defaults.
+    List,
+    /// Render a scene with a method; write images, timings, fragment counts and errors.
+    Run {
+        /// Built-in scene name (see `caustics list`) or path to a scene JSON file.
+        #[arg(long)]
+        scene: String,
+        /// Method name (see `caustics list`).
+        #[arg(long)]
+        method: String,
+        /// Method parameter, `key=value` (repeatable).
+        #[arg(long = "param", value_name = "KEY=VALUE")]
+        params: Vec<String>,
+        /// Measured frames (timings are medians over these).
+        #[arg(long, default_value_t = 20)]
+        frames: u32,
+        /// Warm-up frames before measuring.
+        #[arg(long, default_value_t = 3)]
+        warmup: u32,
+        /// Reference surface caustic image (EXR) to score against.
+        #[arg(long, value_name = "FILE.exr")]
+        reference: Option<PathBuf>,
+        /// Output root; results go under DIR/<scene>/<method>/.
+        #[arg(long, value_name = "DIR", default_value = "results/runs")]
+        out: PathBuf,
+        /// Substring of the adapter name to use (default: CAUSTICS_ADAPTER, else the
+        /// first hardware adapter, else lavapipe).
+        #[arg(long)]
+        adapter: Option<String>,
+        /// Exposure scale of the tone-mapped PNGs and of FLIP: linear × scale, clamp, sRGB.
+        #[arg(long, default_value_t = 2.0)]
+        exposure: f32,
+    },
+}
+
+fn list() {
+    println!("scenes ({}):", caustics_scene::builtin_dir().display());
+    for name in caustics_scene::builtin_names() {
+        let desc = caustics_scene::resolve(&name)
+            .ok()
+            .and_then(|p| caustics_scene::Scene::load(&p).ok())
+            .map(|s| s.description)
+            .unwrap_or_else(|| "(does not load: run `caustics run` on it for the error)".into());
+        println!("  {name:<20} {desc}");
+    }
+    println!("\nmethods:");
+    for m in registry::methods() {
+        println!("  {:<20} {}", m.name, m.summary);
+        println!("  {:<20} source: {}", "", m.source);
+        println!("  {:<20} supports: {}", "", m.capabilities.describe());
+        for p in (m.params)() {
+            println!("  {:<20}   --param {}={}  {}", "", p.name, p.default, p.doc);
+        }
+    }
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let outcome: Result<ExitCode> = match cli.command {
+        Command::List => {
+            list();
+            Ok(ExitCode::SUCCESS)
+        }
+        Command::Run {
+            scene,
+            method,
+            params,
+            frames,
+            warmup,
+            reference,
+            out,
+            adapter,
+            exposure,
+        } => {
+            let opts = RunOptions {
+                scene,
+                method,
+                params,
+                frames,
+                warmup,
+                reference,
+                out,
+                adapter,
+                exposure,
+            };
+            run::run(&opts).map(|o| match o {
+                RunOutcome::Done { dir, result } => {
+                    print_summary(&dir, &result);
+                    ExitCode::SUCCESS
+                }
+                RunOutcome::Skipped { reason } => {
+                    eprintln!(
+                        "skipped: method {} cannot render scene {}: {reason}",
+                        opts.method, opts.scene
+                    );
+                    ExitCode::from(EXIT_SKIPPED as u8)
+                }
+            })
+        }
+    };
+    match outcome {
+        Ok(code) => code,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn print_summary(dir: &std::path::Path, r: &caustics::result::RunResult) {
+    println!(
+        "{} / {} on {} ({})",
+        r.scene.name, r.method.name, r.machine.adapter, r.build.profile
+    );
+    for p in &r.timing.passes {
+        match &p.gpu_ms {
+            Some(s) => println!(
+                "  {:<32} {:>9.3} ms  (p10 {:.3}, p90 {:.3})",
+                p.name, s.median, s.p10, s.p90
+            ),
+            None => println!("  {:<32} {:>9} (no timestamps)", p.name, "-"),
+        }
+    }
+    if let Some(s) = &r.timing.method_gpu_ms {
+        println!("  {:<32} {:>9.3} ms", "method total", s.median);
+    }
+    if let Some(f) = &r.fragments {
+        println!(
+            "  fragments: method {} (fill-counted {}, max {}/px)",
+            f.method_total, f.fill_total, f.fill_max
+        );
+    }
+    for (k, v) in &r.counters {
+        println!("  {k}: {v}");
+    }
+    if let Some(e) = &r.errors {
+        println!(
+            "  errors: RMSE {:.4e}, relMSE {:.4e}, PSNR {:.2} dB, SSIM {:.4}, FLIP {:.4} (best scale {:.3})",
+            e.surface.rmse,
+            e.surface.rel_mse,
+            e.surface.psnr_db,
+            e.surface.ssim,
+            e.surface.flip,
+            e.surface.best_scale
+        );
+    }
+    println!("  written to {}", dir.display());
+}

@@ -1,1 +1,42 @@
-//! Headless wgpu layer of caustics-bench: adapter choice, scene upload, G-buffers, direct lighting, instrumentation, readback.
+//! Headless wgpu layer of caustics-bench: adapter choice, one scene upload, the
+//! camera and light G-buffers, direct lighting with shadows, the HDR radiance targets
+//! and the instrumentation (timestamps and pipeline statistics per named pass, fill
+//! counting per pixel) through which the harness measures every method alike.
+//!
+//! ```no_run
+//! use caustics_gpu::{AdapterChoice, GpuContext, GpuScene, Renderer, RendererOptions, PassProfiler, FrameMode};
+//! # fn main() -> Result<(), Box<dyn std::error::Error>> {
+//! let ctx = GpuContext::new(&AdapterChoice::from_flag_or_env(None))?;
+//! let scene = caustics_scene::Scene::load(&caustics_scene::resolve("sphere_on_plane")?)?;
+//! let gpu_scene = GpuScene::upload(&ctx, scene.into(), Default::default())?;
+//! let renderer = Renderer::new(&ctx, gpu_scene, RendererOptions::default())?;
+//! let mut profiler = PassProfiler::new(&ctx, 1);
+//! let frame = renderer.begin_frame(&mut profiler, FrameMode::Timed)?;
+//! frame.submit(&ctx)?;
+//! for f in profiler.collect(&ctx)? {
+//!     for p in f.passes { println!("{}: {:?} ms", p.name, p.gpu_ms); }
+//! }
+//! # Ok(()) }
+//! ```
+
+mod context;
+mod error;
+pub mod frame;
+pub mod gbuffer;
+pub mod profiling;
+pub mod readback;
+pub mod renderer;
+pub mod scene_upload;
+pub mod shader;
+pub mod textures;
+
+pub use context::{
+    ADAPTER_ENV, AdapterChoice, AdapterSummary, GpuContext, OPTIONAL_FEATURES, REQUIRED_FEATURES,
+};
+pub use error::GpuError;
+pub use frame::{Frame, ProfiledComputePass, ProfiledRenderPass};
+pub use gbuffer::{GBuffer, LightProjection, LightView};
+pub use profiling::{FrameMode, FrameSample, PassProfiler, PassSample, PassStatistics};
+pub use renderer::{CountedPipeline, Renderer, RendererOptions, fill_constants, pass_desc};
+pub use scene_upload::GpuScene;
+pub use wgpu;

@@ -1,1 +1,297 @@
-//! The method contract of caustics-bench: the trait every caustics method implements, its parameters, counters and capabilities.
+//! The method contract of caustics-bench (DESIGN "The method contract").
+//!
+//! A method is built from a scene already uploaded to the GPU (the shared
+//! [`Renderer`]) and its own typed parameters; per frame it records its named passes
+//! into the frame ([`Frame::render_pass`] / [`Frame::compute_pass`] wrap them in the
+//! harness's profiler) and writes the shared HDR targets: surface caustic radiance
+//! and volume caustic radiance. It reports counters and the GPU memory it owns, and
+//! declares what it supports so that the harness skips, with the reason, a scene it
+//! cannot render. The harness, not the method, owns timing, fill counting and scoring.
+
+use std::collections::BTreeMap;
+
+use caustics_gpu::{Frame, GpuContext, GpuError, Renderer};
+use caustics_scene::Scene;
+use serde::de::DeserializeOwned;
+
+/// A method instance bound to one scene.
+pub trait CausticsMethod {
+    /// Records the method's passes for one frame. In count frames
+    /// (`frame.counting()`), camera-resolution pipelines must use their fill-counting
+    /// variant ([`caustics_gpu::CountedPipeline`]).
+    fn record(&mut self, frame: &mut Frame<'_>) -> Result<(), MethodError>;
+
+    /// Counters of the last frame (beams, triangles, photons, overflow, ...). Called
+    /// once after the measured frames; may read small GPU buffers back.
+    fn counters(&self, ctx: &GpuContext) -> Result<Counters, MethodError>;
+
+    /// Bytes of GPU memory the method owns (buffers and textures it allocated).
+    fn gpu_memory_bytes(&self) -> u64;
+}
+
+/// Named integer counters, sorted by name for stable result files.
+pub type Counters = BTreeMap<String, u64>;
+
+/// What a method can render (DESIGN: declare support, never produce a wrong number).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Capabilities {
+    /// Writes the surface caustic image (L S+ D E).
+    pub surface: bool,
+    /// Writes the volume caustic image (L S+ M E).
+    pub volume: bool,
+    /// Handles mirrors.
+    pub reflection: bool,
+    /// Handles dielectrics.
+    pub refraction: bool,
+    /// Follows light through more than one specular object in sequence.
+    pub multiple_bounces: bool,
+    /// Directional lights.
+    pub directional_light: bool,
+    /// Point lights.
+    pub point_light: bool,
+    /// Spot lights.
+    pub spot_light: bool,
+}
+
+impl Capabilities {
+    /// Human-readable list, for `caustics list`.
+    pub fn describe(&self) -> String {
+        let flags = [
+            (self.surface, "surface"),
+            (self.volume, "volume"),
+            (self.reflection, "reflection"),
+            (self.refraction, "refraction"),
+            (self.multiple_bounces, "multiple bounces"),
+            (self.directional_light, "directional light"),
+            (self.point_light, "point light"),
+            (self.spot_light, "spot light"),
+        ];
+        flags
+            .iter()
+            .filter(|(on, _)| *on)
+            .map(|(_, n)| *n)
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
+
+    /// The generic checks every method shares: light kinds, medium, material kinds.
+    /// Method-specific limits go in [`MethodInfo::check_scene`].
+    pub fn check(&self, scene: &Scene) -> Result<(), Unsupported> {
+        use caustics_scene::{Light, Material};
+        for (i, l) in scene.lights.iter().enumerate() {
+            let (ok, kind) = match l {
+                Light::Directional { .. } => (self.directional_light, "directional"),
+                Light::Point { .. } => (self.point_light, "point"),
+                Light::Spot { .. } => (self.spot_light, "spot"),
+            };
+            if !ok {
+                return Err(Unsupported(format!(
+                    "lights[{i}] is a {kind} light, which this method does not support"
+                )));
+            }
+        }
+        if scene.medium.is_some() && !self.volume {
+            return Err(Unsupported(
+                "the scene has a participating medium, and this method renders neither volume caustics nor extinction"
+                    .into(),
+            ));
+        }
+        for (i, o) in scene.objects.iter().enumerate() {
+            let name = &scene.materials[o.material].name;
+            match scene.material(o) {
+                Material::Mirror { .. } if !self.reflection => {
+                    return Err(Unsupported(format!(
+                        "objects[{i}] is a mirror ({name:?}); this method handles no reflection"
+                    )));
+                }
+                Material::Dielectric { .. } if !self.refraction => {
+                    return Err(Unsupported(format!(
+                        "objects[{i}] is a dielectric ({name:?}); this method handles no refraction"
+                    )));
+                }
+                _ => {}
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Why a method cannot render a scene.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("{0}")]
+pub struct Unsupported(pub String);
+
+/// Errors of a method crate.
+#[derive(Debug, thiserror::Error)]
+pub enum MethodError {
+    /// A parameter is unknown, of the wrong type or out of range.
+    #[error("method {method}: parameter {message}")]
+    Param {
+        /// Method name.
+        method: &'static str,
+        /// What is wrong, naming the parameter and what was expected.
+        message: String,
+    },
+    /// The scene cannot be rendered by this method.
+    #[error("method {method} cannot render scene {scene}: {reason}")]
+    Unsupported {
+        /// Method name.
+        method: &'static str,
+        /// Scene name.
+        scene: String,
+        /// Why.
+        reason: Unsupported,
+    },
+    /// A GPU failure.
+    #[error(transparent)]
+    Gpu(#[from] GpuError),
+}
+
+/// One parameter as `caustics list` shows it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ParamSpec {
+    /// Name used in `--param name=value`.
+    pub name: String,
+    /// Default value, as JSON.
+    pub default: serde_json::Value,
+    /// What it does.
+    pub doc: &'static str,
+}
+
+/// Everything the harness's registry knows of a method.
+pub struct MethodInfo {
+    /// Registry name (`--method`).
+    pub name: &'static str,
+    /// One line on what it is.
+    pub summary: &'static str,
+    /// The paper it implements.
+    pub source: &'static str,
+    /// What it supports.
+    pub capabilities: Capabilities,
+    /// Its parameters with defaults (the paper's) and docs.
+    pub params: fn() -> Vec<ParamSpec>,
+    /// Parses and range-checks parameters without touching the GPU, so a bad
+    /// `--param` fails before any work or any write.
+    pub validate_params: fn(&serde_json::Value) -> Result<(), MethodError>,
+    /// Scene checks beyond the generic ones, given the (valid) parameters.
+    pub check_scene: fn(&Scene, &serde_json::Value) -> Result<(), Unsupported>,
+    /// Builds an instance for a scene, from parameters given as a JSON object.
+    pub create: fn(
+        &GpuContext,
+        &Renderer,
+        &serde_json::Value,
+    ) -> Result<Box<dyn CausticsMethod>, MethodError>,
+}
+
+impl MethodInfo {
+    /// Generic capability checks, then the method's own.
+    pub fn supports(&self, scene: &Scene, params: &serde_json::Value) -> Result<(), Unsupported> {
+        self.capabilities.check(scene)?;
+        (self.check_scene)(scene, params)
+    }
+}
+
+/// Deserializes a method's parameter struct from a JSON object (missing keys take the
+/// struct's defaults; use `#[serde(default, deny_unknown_fields)]`), with an error that
+/// names the parameter and lists the known ones.
+pub fn parse_params<P: DeserializeOwned + serde::Serialize + Default>(
+    method: &'static str,
+    params: &serde_json::Value,
+) -> Result<P, MethodError> {
+    let known = param_names(&P::default());
+    let obj = match params {
+        serde_json::Value::Null => return Ok(P::default()),
+        serde_json::Value::Object(o) => o,
+        other => {
+            return Err(MethodError::Param {
+                method,
+                message: format!("expected a JSON object, got {other}"),
+            });
+        }
+    };
+    for key in obj.keys() {
+        if !known.contains(key) {
+            return Err(MethodError::Param {
+                method,
+                message: format!("{key:?} is unknown; known parameters: {}", known.join(", ")),
+            });
+        }
+    }
+    serde_json::from_value(params.clone()).map_err(|e| MethodError::Param {
+        method,
+        message: e.to_string(),
+    })
+}
+
+fn param_names<P: serde::Serialize>(p: &P) -> Vec<String> {
+    match serde_json::to_value(p) {
+        Ok(serde_json::Value::Object(o)) => o.keys().cloned().collect(),
+        _ => Vec::new(),
+    }
+}
+
+/// Parameter specs from a defaults struct and per-field docs (`(name, doc)` pairs).
+pub fn param_specs<P: serde::Serialize + Default>(
+    docs: &[(&'static str, &'static str)],
+) -> Vec<ParamSpec> {
+    let defaults = match serde_json::to_value(P::default()) {
+        Ok(serde_json::Value::Object(o)) => o,
+        _ => Default::default(),
+    };
+    defaults
+        .into_iter()
+        .map(|(name, default)| {
+            let doc = docs
+                .iter()
+                .find(|(n, _)| *n == name)
+                .map(|(_, d)| *d)
+                .unwrap_or("");
+            ParamSpec { name, default, doc }
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[derive(serde::Serialize, serde::Deserialize, Default, Debug, PartialEq)]
+    #[serde(default, deny_unknown_fields)]
+    struct P {
+        grid: u32,
+        scale: f32,
+    }
+
+    #[test]
+    fn unknown_param_names_the_known_ones() {
+        let e = parse_params::<P>("m", &serde_json::json!({"gird": 3}))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("\"gird\" is unknown") && e.contains("grid, scale"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn wrong_type_is_an_error_and_defaults_fill_in() {
+        assert!(parse_params::<P>("m", &serde_json::json!({"grid": "x"})).is_err());
+        assert!(parse_params::<P>("m", &serde_json::json!({"grid": -1})).is_err());
+        let p = parse_params::<P>("m", &serde_json::json!({"grid": 7})).unwrap();
+        assert_eq!(
+            p,
+            P {
+                grid: 7,
+                scale: 0.0
+            }
+        );
+    }
+
+    #[test]
+    fn specs_list_defaults_and_docs() {
+        let s = param_specs::<P>(&[("grid", "grid size")]);
+        assert_eq!(s.len(), 2);
+        assert_eq!(s[0].name, "grid");
+        assert_eq!(s[0].doc, "grid size");
+    }
+}

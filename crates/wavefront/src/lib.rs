@@ -1,1 +1,636 @@
-//! Wallace (2016) wavefront caustics: a refracted light mesh whose brightness is the area ratio from screen-space derivatives.
+//! `wavefront`: Wallace's WebGL caustics (2016) as a caustics-bench method.
+//!
+//! The light is a wavefront mesh: each vertex is a light ray, each triangle the bundle
+//! of rays between its vertices. The rays are traced through the refractor to the
+//! receivers (`trace.wgsl`), triangles that stay on one receiver are kept
+//! (`classify.wgsl`), and the refracted mesh is drawn from the camera with brightness
+//! = flux density × (area before)/(area after), the two areas taken from screen-space
+//! derivatives of the old and new positions (`splat.wgsl`). Flux density is the
+//! light's irradiance per unit area of the plane perpendicular to a directional
+//! light (or its intensity per steradian for a point/spot light) times the Fresnel
+//! transmittance of each interface, so the result is absolute radiance
+//! ρ/π · E in DESIGN units. For flat water it is exactly ρ/π · T(θ) · E · cos θ.
+//!
+//! Supports one dielectric caustic generator (an open heightfield, refracted once,
+//! or an analytic sphere, refracted on entry and exit), one light of any kind and
+//! analytic diffuse receivers (quads, spheres, cylinders). It does not follow
+//! reflection, chains of specular objects, meshes or media: such scenes are skipped
+//! with the reason. Like the original, it ignores the light reflected at the
+//! interfaces and point-samples triangles thinner than a pixel (noisy cusps).
+
+mod sources;
+
+use bytemuck::{Pod, Zeroable};
+use caustics_gpu::wgpu::{self, util::DeviceExt};
+use caustics_gpu::{CountedPipeline, Frame, GpuContext, Renderer, pass_desc, shader};
+use caustics_method::{
+    Capabilities, CausticsMethod, Counters, MethodError, MethodInfo, Unsupported, param_specs,
+    parse_params,
+};
+use caustics_scene::{Material, Scene, Shape};
+use serde::{Deserialize, Serialize};
+
+pub use sources::{Source, WavefrontMesh};
+
+const TRACE_WGSL: &str = include_str!("trace.wgsl");
+const CLASSIFY_WGSL: &str = include_str!("classify.wgsl");
+const SPLAT_WGSL: &str = include_str!("splat.wgsl");
+
+/// Registry name.
+pub const NAME: &str = "wavefront";
+
+/// Parameters of `wavefront`.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(default, deny_unknown_fields)]
+pub struct WavefrontParams {
+    /// Rays per side of the light-ray lattice over an analytic (sphere) refractor.
+    /// Heightfields use their own vertex grid, as Wallace does.
+    pub grid: u32,
+    /// A caustic fragment counts only where the camera G-buffer's surface is within
+    /// `tolerance` × (distance to the eye) of the triangle's receiver point.
+    pub tolerance: f64,
+}
+
+impl Default for WavefrontParams {
+    fn default() -> Self {
+        Self {
+            grid: 512,
+            tolerance: 2e-3,
+        }
+    }
+}
+
+impl WavefrontParams {
+    fn validate(&self) -> Result<(), MethodError> {
+        let err = |message: String| {
+            Err(MethodError::Param {
+                method: NAME,
+                message,
+            })
+        };
+        if !(2..=1024).contains(&self.grid) {
+            return err(format!(
+                "grid: expected an integer in 2..=1024, got {}",
+                self.grid
+            ));
+        }
+        if !(self.tolerance.is_finite() && self.tolerance > 0.0 && self.tolerance < 1.0) {
+            return err(format!(
+                "tolerance: expected a number in (0, 1), got {}",
+                self.tolerance
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// The registry entry.
+pub fn info() -> MethodInfo {
+    MethodInfo {
+        name: NAME,
+        summary: "refracted wavefront mesh, brightness = area ratio from screen-space derivatives",
+        source: "Wallace 2016, Rendering Realtime Caustics in WebGL (wallace-2016-webgl-caustics.txt)",
+        capabilities: Capabilities {
+            surface: true,
+            volume: false,
+            reflection: false,
+            refraction: true,
+            multiple_bounces: false,
+            directional_light: true,
+            point_light: true,
+            spot_light: true,
+        },
+        params: || {
+            param_specs::<WavefrontParams>(&[
+                (
+                    "grid",
+                    "rays per side of the light-ray lattice over a sphere refractor (heightfields use their vertex grid)",
+                ),
+                (
+                    "tolerance",
+                    "receiver match: max |G-buffer position - triangle point| / distance to eye",
+                ),
+            ])
+        },
+        validate_params: |v| parse_params::<WavefrontParams>(NAME, v)?.validate(),
+        check_scene,
+        create,
+    }
+}
+
+/// The one specular object `wavefront` refracts through, or why the scene is out of reach.
+pub fn caustic_generator(scene: &Scene) -> Result<usize, Unsupported> {
+    if scene.lights.len() != 1 {
+        return Err(Unsupported(format!(
+            "needs exactly one light, the scene has {}",
+            scene.lights.len()
+        )));
+    }
+    let mut generator = None;
+    for (i, o) in scene.objects.iter().enumerate() {
+        let specular = scene.material(o).is_specular();
+        match (&o.shape, specular) {
+            (Shape::Heightfield(_) | Shape::Sphere { .. }, true) => {
+                if let Some(first) = generator {
+                    return Err(Unsupported(format!(
+                        "objects[{first}] and objects[{i}] are both specular; wavefront follows one refraction event (no chains)"
+                    )));
+                }
+                if !matches!(scene.material(o), Material::Dielectric { .. }) {
+                    return Err(Unsupported(format!(
+                        "objects[{i}] is a mirror; wavefront handles refraction only"
+                    )));
+                }
+                generator = Some(i);
+            }
+            (Shape::Mesh(_), _) => {
+                return Err(Unsupported(format!(
+                    "objects[{i}] is a mesh; wavefront traces analytic shapes only"
+                )));
+            }
+            (Shape::Heightfield(_), false) => {
+                return Err(Unsupported(format!(
+                    "objects[{i}] is a diffuse heightfield; wavefront receivers must be analytic"
+                )));
+            }
+            (_, true) => {
+                return Err(Unsupported(format!(
+                    "objects[{i}] is a specular {}; wavefront refracts through heightfields and spheres only",
+                    shape_name(&o.shape)
+                )));
+            }
+            _ => {}
+        }
+    }
+    generator.ok_or_else(|| Unsupported("the scene has no specular object".into()))
+}
+
+fn shape_name(s: &Shape) -> &'static str {
+    match s {
+        Shape::Sphere { .. } => "sphere",
+        Shape::Quad { .. } => "quad",
+        Shape::Heightfield(_) => "heightfield",
+        Shape::Cylinder { .. } => "cylinder",
+        Shape::Mesh(_) => "mesh",
+    }
+}
+
+fn check_scene(scene: &Scene, params: &serde_json::Value) -> Result<(), Unsupported> {
+    let g = caustic_generator(scene)?;
+    if let (Shape::Sphere { center, radius }, Some(light)) =
+        (&scene.objects[g].shape, scene.lights.first())
+    {
+        let grid = parse_params::<WavefrontParams>(NAME, params)
+            .map(|p| p.grid)
+            .unwrap_or(2)
+            .max(2);
+        if sources::sphere_rays(*center, *radius, light, grid.min(2)).is_none() {
+            return Err(Unsupported(
+                "the light is inside the refracting sphere".into(),
+            ));
+        }
+    }
+    Ok(())
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct TraceParams {
+    specular_object: u32,
+    light_index: u32,
+    source_count: u32,
+    triangle_count: u32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct SplatParams {
+    tolerance: f32,
+    _pad: [f32; 3],
+}
+
+/// Indirect draw arguments followed by drop counters (matches `DrawCounters`).
+const COUNTERS_INIT: [u32; 8] = [0, 1, 0, 0, 0, 0, 0, 0];
+
+/// `wavefront` bound to one scene.
+pub struct Wavefront {
+    trace_pipeline: wgpu::ComputePipeline,
+    classify_pipeline: wgpu::ComputePipeline,
+    splat_pipeline: CountedPipeline<wgpu::RenderPipeline>,
+    trace_bind: wgpu::BindGroup,
+    classify_bind: wgpu::BindGroup,
+    splat_bind: wgpu::BindGroup,
+    counters: wgpu::Buffer,
+    counters_init: wgpu::Buffer,
+    source_count: u32,
+    triangle_count: u32,
+    bytes: u64,
+}
+
+fn create(
+    ctx: &GpuContext,
+    renderer: &Renderer,
+    params: &serde_json::Value,
+) -> Result<Box<dyn CausticsMethod>, MethodError> {
+    let p: WavefrontParams = parse_params(NAME, params)?;
+    p.validate()?;
+    Ok(Box::new(Wavefront::new(ctx, renderer, &p)?))
+}
+
+fn storage(
+    binding: u32,
+    read_only: bool,
+    visibility: wgpu::ShaderStages,
+) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+fn uniform(binding: u32, visibility: wgpu::ShaderStages) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Uniform,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+fn bind(
+    device: &wgpu::Device,
+    label: &str,
+    layout: &wgpu::BindGroupLayout,
+    buffers: &[&wgpu::Buffer],
+) -> wgpu::BindGroup {
+    let entries: Vec<_> = buffers
+        .iter()
+        .enumerate()
+        .map(|(i, b)| wgpu::BindGroupEntry {
+            binding: i as u32,
+            resource: b.as_entire_binding(),
+        })
+        .collect();
+    device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some(label),
+        layout,
+        entries: &entries,
+    })
+}
+
+impl Wavefront {
+    /// Builds the wavefront of the scene's caustic generator and the three passes.
+    pub fn new(
+        ctx: &GpuContext,
+        renderer: &Renderer,
+        params: &WavefrontParams,
+    ) -> Result<Self, MethodError> {
+        let gpu_scene = renderer.scene();
+        let scene = &gpu_scene.scene;
+        let unsupported = |reason| MethodError::Unsupported {
+            method: NAME,
+            scene: scene.name.clone(),
+            reason,
+        };
+        let generator = caustic_generator(scene).map_err(unsupported)?;
+        let light = &scene.lights[0];
+        let mesh = sources::for_shape(
+            &scene.objects[generator].shape,
+            &gpu_scene.meshes[generator],
+            light,
+            params.grid,
+        )
+        .ok_or_else(|| {
+            unsupported(Unsupported(
+                "cannot build a wavefront for this refractor and light".into(),
+            ))
+        })?;
+        let res = ctx.checked("wavefront setup", || {
+            Self::build(ctx, renderer, params, generator as u32, &mesh)
+        })?;
+        Ok(res)
+    }
+
+    fn build(
+        ctx: &GpuContext,
+        renderer: &Renderer,
+        params: &WavefrontParams,
+        generator: u32,
+        mesh: &WavefrontMesh,
+    ) -> Self {
+        let device = &ctx.device;
+        let source_count = mesh.sources.len() as u32;
+        let triangle_count = (mesh.triangles.len() / 3) as u32;
+        let init = |label: &str, contents: &[u8], usage| {
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents,
+                usage,
+            })
+        };
+        let storage_usage = wgpu::BufferUsages::STORAGE;
+        let trace_params = init(
+            "wavefront trace params",
+            bytemuck::bytes_of(&TraceParams {
+                specular_object: generator,
+                light_index: 0,
+                source_count,
+                triangle_count,
+            }),
+            wgpu::BufferUsages::UNIFORM,
+        );
+        let splat_params = init(
+            "wavefront splat params",
+            bytemuck::bytes_of(&SplatParams {
+                tolerance: params.tolerance as f32,
+                _pad: [0.0; 3],
+            }),
+            wgpu::BufferUsages::UNIFORM,
+        );
+        let sources = init(
+            "wavefront sources",
+            bytemuck::cast_slice(&mesh.sources),
+            storage_usage,
+        );
+        let triangles = init(
+            "wavefront triangles",
+            bytemuck::cast_slice(&mesh.triangles),
+            storage_usage,
+        );
+        let traced = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("wavefront traced vertices"),
+            size: source_count as u64 * 64,
+            usage: storage_usage,
+            mapped_at_creation: false,
+        });
+        let kept = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("wavefront kept triangles"),
+            size: triangle_count.max(1) as u64 * 4,
+            usage: storage_usage,
+            mapped_at_creation: false,
+        });
+        let counters = init(
+            "wavefront draw counters",
+            bytemuck::cast_slice(&COUNTERS_INIT),
+            storage_usage
+                | wgpu::BufferUsages::INDIRECT
+                | wgpu::BufferUsages::COPY_DST
+                | wgpu::BufferUsages::COPY_SRC,
+        );
+        let counters_init = init(
+            "wavefront counters reset",
+            bytemuck::cast_slice(&COUNTERS_INIT),
+            wgpu::BufferUsages::COPY_SRC,
+        );
+
+        let cs = wgpu::ShaderStages::COMPUTE;
+        let trace_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("wavefront trace"),
+            entries: &[uniform(0, cs), storage(1, true, cs), storage(2, false, cs)],
+        });
+        let classify_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("wavefront classify"),
+            entries: &[
+                uniform(0, cs),
+                storage(1, true, cs),
+                storage(2, true, cs),
+                storage(3, false, cs),
+                storage(4, false, cs),
+            ],
+        });
+        let vf = wgpu::ShaderStages::VERTEX_FRAGMENT;
+        let splat_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("wavefront splat"),
+            entries: &[
+                uniform(0, vf),
+                storage(1, true, vf),
+                storage(2, true, vf),
+                storage(3, true, vf),
+            ],
+        });
+        let trace_bind = bind(
+            device,
+            "wavefront trace",
+            &trace_layout,
+            &[&trace_params, &sources, &traced],
+        );
+        let classify_bind = bind(
+            device,
+            "wavefront classify",
+            &classify_layout,
+            &[&trace_params, &traced, &triangles, &kept, &counters],
+        );
+        let splat_bind = bind(
+            device,
+            "wavefront splat",
+            &splat_layout,
+            &[&splat_params, &traced, &triangles, &kept],
+        );
+
+        let pipeline_layout = |label: &str, own: &wgpu::BindGroupLayout| {
+            device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some(label),
+                bind_group_layouts: &[Some(renderer.frame_layout()), Some(own)],
+                immediate_size: 0,
+            })
+        };
+        let compute = |label: &str, src: &str, entry: &str, own: &wgpu::BindGroupLayout| {
+            let module = shader::module(device, label, shader::compose_method(src));
+            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(label),
+                layout: Some(&pipeline_layout(label, own)),
+                module: &module,
+                entry_point: Some(entry),
+                compilation_options: Default::default(),
+                cache: None,
+            })
+        };
+        let trace_pipeline = compute(
+            "wavefront trace.wgsl",
+            TRACE_WGSL,
+            "trace_vertices",
+            &trace_layout,
+        );
+        let classify_pipeline = compute(
+            "wavefront classify.wgsl",
+            CLASSIFY_WGSL,
+            "classify_triangles",
+            &classify_layout,
+        );
+
+        let splat_module = shader::module(
+            device,
+            "wavefront splat.wgsl",
+            shader::compose_method(SPLAT_WGSL),
+        );
+        let splat_layout_p = pipeline_layout("wavefront splat", &splat_layout);
+        let additive = wgpu::BlendComponent {
+            src_factor: wgpu::BlendFactor::One,
+            dst_factor: wgpu::BlendFactor::One,
+            operation: wgpu::BlendOperation::Add,
+        };
+        let splat_pipeline = CountedPipeline::new(|constants| {
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some("wavefront splat"),
+                layout: Some(&splat_layout_p),
+                vertex: wgpu::VertexState {
+                    module: &splat_module,
+                    entry_point: Some("vs_splat"),
+                    compilation_options: Default::default(),
+                    buffers: &[],
+                },
+                // Folded triangles face away: both windings count.
+                primitive: wgpu::PrimitiveState {
+                    cull_mode: None,
+                    ..Default::default()
+                },
+                depth_stencil: None,
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &splat_module,
+                    entry_point: Some("fs_splat"),
+                    compilation_options: wgpu::PipelineCompilationOptions {
+                        constants,
+                        ..Default::default()
+                    },
+                    targets: &[Some(wgpu::ColorTargetState {
+                        format: caustics_gpu::textures::HDR_FORMAT,
+                        blend: Some(wgpu::BlendState {
+                            color: additive,
+                            alpha: additive,
+                        }),
+                        write_mask: wgpu::ColorWrites::ALL,
+                    })],
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        });
+        let bytes = [
+            &trace_params,
+            &splat_params,
+            &sources,
+            &triangles,
+            &traced,
+            &kept,
+            &counters,
+            &counters_init,
+        ]
+        .iter()
+        .map(|b| b.size())
+        .sum();
+        Self {
+            trace_pipeline,
+            classify_pipeline,
+            splat_pipeline,
+            trace_bind,
+            classify_bind,
+            splat_bind,
+            counters,
+            counters_init,
+            source_count,
+            triangle_count,
+            bytes,
+        }
+    }
+}
+
+impl CausticsMethod for Wavefront {
+    fn record(&mut self, frame: &mut Frame<'_>) -> Result<(), MethodError> {
+        let renderer = frame.renderer;
+        frame.encoder.copy_buffer_to_buffer(
+            &self.counters_init,
+            0,
+            &self.counters,
+            0,
+            self.counters.size(),
+        );
+        {
+            let mut pass = frame.compute_pass("wavefront/trace_vertices")?;
+            pass.set_pipeline(&self.trace_pipeline);
+            pass.set_bind_group(0, renderer.frame_bind_group(), &[]);
+            pass.set_bind_group(1, &self.trace_bind, &[]);
+            pass.dispatch_workgroups(self.source_count.div_ceil(64), 1, 1);
+        }
+        {
+            let mut pass = frame.compute_pass("wavefront/classify_triangles")?;
+            pass.set_pipeline(&self.classify_pipeline);
+            pass.set_bind_group(0, renderer.frame_bind_group(), &[]);
+            pass.set_bind_group(1, &self.classify_bind, &[]);
+            pass.dispatch_workgroups(self.triangle_count.div_ceil(64), 1, 1);
+        }
+        let pipeline = self.splat_pipeline.get(frame);
+        let attachments = [Some(wgpu::RenderPassColorAttachment {
+            view: &renderer.targets().surface.view,
+            depth_slice: None,
+            resolve_target: None,
+            ops: wgpu::Operations {
+                load: wgpu::LoadOp::Load,
+                store: wgpu::StoreOp::Store,
+            },
+        })];
+        let mut pass = frame.render_pass("wavefront/splat", pass_desc(&attachments))?;
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, renderer.frame_bind_group(), &[]);
+        pass.set_bind_group(1, &self.splat_bind, &[]);
+        pass.draw_indirect(&self.counters, 0);
+        Ok(())
+    }
+
+    fn counters(&self, ctx: &GpuContext) -> Result<Counters, MethodError> {
+        let c = caustics_gpu::readback::read_buffer_u32(
+            ctx,
+            &self.counters,
+            self.counters.size(),
+            "wavefront counters",
+        )?;
+        let mut out = Counters::new();
+        out.insert("source_vertices".into(), self.source_count as u64);
+        out.insert("triangles".into(), self.triangle_count as u64);
+        out.insert("kept_triangles".into(), c[0] as u64 / 3);
+        out.insert("dropped_invalid_vertex".into(), c[4] as u64);
+        out.insert("dropped_receiver_mismatch".into(), c[5] as u64);
+        Ok(out)
+    }
+
+    fn gpu_memory_bytes(&self) -> u64 {
+        self.bytes
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shaders_validate() -> Result<(), String> {
+        shader::validate_wgsl("trace.wgsl", &shader::compose_method(TRACE_WGSL))?;
+        shader::validate_wgsl("classify.wgsl", &shader::compose_method(CLASSIFY_WGSL))?;
+        shader::validate_wgsl("splat.wgsl", &shader::compose_method(SPLAT_WGSL))
+    }
+
+    #[test]
+    fn bad_params_are_errors() {
+        for (json, needle) in [
+            (serde_json::json!({"grid": 1}), "grid"),
+            (serde_json::json!({"grid": 5000}), "grid"),
+            (serde_json::json!({"tolerance": 0.0}), "tolerance"),
+            (serde_json::json!({"grd": 4}), "known parameters"),
+        ] {
+            let e =
+                parse_params::<WavefrontParams>(NAME, &json).and_then(|p| p.validate().map(|_| p));
+            let msg = e.expect_err("must fail").to_string();
+            assert!(msg.contains(needle), "{msg}");
+        }
+    }
+}

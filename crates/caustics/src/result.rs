@@ -1,0 +1,178 @@
+//! `result.json`: one document per (scene, method, parameter set), DESIGN "Results".
+
+use std::collections::BTreeMap;
+
+use serde::{Deserialize, Serialize};
+
+use crate::machine::{Build, Machine};
+use crate::stats::Summary;
+
+/// Bumped whenever a field changes meaning or is removed.
+pub const SCHEMA_VERSION: u32 = 1;
+
+/// The whole result of one run.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RunResult {
+    /// [`SCHEMA_VERSION`] of the writer.
+    pub schema_version: u32,
+    /// Source and profile of the binary.
+    pub build: Build,
+    /// Adapter and CPU.
+    pub machine: Machine,
+    /// What was rendered.
+    pub scene: SceneInfo,
+    /// With what.
+    pub method: MethodRun,
+    /// How many frames of each kind.
+    pub frames: FrameCounts,
+    /// Per-pass GPU times over the measured frames.
+    pub timing: Timing,
+    /// Pipeline statistics and fill counts of the count frame; `None` when the
+    /// adapter has no pipeline-statistics queries.
+    pub fragments: Option<Fragments>,
+    /// The method's counters (beams, triangles, overflow, ...).
+    pub counters: BTreeMap<String, u64>,
+    /// GPU memory in bytes.
+    pub gpu_memory_bytes: Memory,
+    /// File names of the images written beside this file.
+    pub images: BTreeMap<String, String>,
+    /// The tone mapping of `composite.png` and of FLIP.
+    pub tone_map: ToneMapInfo,
+    /// Errors against the reference, when one was given.
+    pub errors: Option<ErrorReport>,
+}
+
+/// The scene as run.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneInfo {
+    /// Scene name.
+    pub name: String,
+    /// Scene file.
+    pub file: String,
+    /// Content hash of the scene file and its meshes.
+    pub hash: String,
+    /// Image width (pixels).
+    pub width: u32,
+    /// Image height (pixels).
+    pub height: u32,
+}
+
+/// The method as run.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MethodRun {
+    /// Registry name.
+    pub name: String,
+    /// Parameters given on the command line (the method's defaults fill in the rest).
+    pub params: serde_json::Value,
+}
+
+/// Frame counts.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FrameCounts {
+    /// Warm-up frames, not measured.
+    pub warmup: u32,
+    /// Timed frames.
+    pub measured: u32,
+    /// Count frames (statistics and fill counting on; not timed).
+    pub count: u32,
+}
+
+/// GPU times.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Timing {
+    /// Whether the adapter gives timestamps; without them every `gpu_ms` is absent.
+    pub timestamps_available: bool,
+    /// Per pass name (summed over the pass's instances within a frame, e.g. 6 cube
+    /// faces), over the measured frames, in recording order of first appearance.
+    pub passes: Vec<PassTiming>,
+    /// Sum of the method's passes per frame.
+    pub method_gpu_ms: Option<Summary>,
+    /// Sum of the base passes (G-buffers, direct light) per frame.
+    pub base_gpu_ms: Option<Summary>,
+    /// Sum of all passes per frame.
+    pub frame_gpu_ms: Option<Summary>,
+    /// CPU wall time per frame: record, submit and wait for the GPU.
+    pub frame_wall_ms: Option<Summary>,
+    /// Timestamp pairs rejected as zero or non-monotonic over all measured frames.
+    pub rejected_timestamps: u32,
+}
+
+/// GPU time of one named pass.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PassTiming {
+    /// "<owner>/<pass>".
+    pub name: String,
+    /// Times over the measured frames (absent without timestamps).
+    pub gpu_ms: Option<Summary>,
+}
+
+/// Pipeline statistics of one named pass in the count frame.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PassFragments {
+    /// "<owner>/<pass>".
+    pub name: String,
+    /// Fragment shader invocations.
+    pub fragment_shader_invocations: u64,
+    /// Primitives out of the clipper.
+    pub primitives: u64,
+    /// Vertex shader invocations.
+    pub vertex_shader_invocations: u64,
+    /// Compute shader invocations.
+    pub compute_shader_invocations: u64,
+}
+
+/// Fragments shaded.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Fragments {
+    /// Per pass.
+    pub passes: Vec<PassFragments>,
+    /// Fragment shader invocations of the method's passes.
+    pub method_total: u64,
+    /// Sum of the per-pixel fill counts (the method's camera-resolution fragments).
+    pub fill_total: u64,
+    /// Largest per-pixel count.
+    pub fill_max: u32,
+    /// Pixels with at least one fragment.
+    pub fill_covered_pixels: u64,
+    /// Histogram of per-pixel counts.
+    pub fill_histogram: caustics_metrics::Histogram,
+}
+
+/// GPU memory.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Memory {
+    /// Owned by the method.
+    pub method: u64,
+    /// Owned by the base renderer (scene upload, G-buffers, targets, fill counter).
+    pub base: u64,
+}
+
+/// Tone mapping used for PNGs and FLIP.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ToneMapInfo {
+    /// Linear radiance is multiplied by this, clamped to [0, 1], then sRGB-encoded.
+    pub exposure_scale: f32,
+}
+
+/// Errors of the surface caustic image against a reference.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ErrorReport {
+    /// The reference image.
+    pub reference: String,
+    /// Errors of the surface caustic image.
+    pub surface: caustics_metrics::Errors,
+    /// RMS of the reference's own per-pixel standard error (from `stderr.exr` beside
+    /// it), the noise floor below which RMSE differences mean nothing.
+    pub reference_noise_rms: Option<f64>,
+}

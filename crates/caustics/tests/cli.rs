@@ -1,0 +1,178 @@
+//! The `caustics` binary's handling of bad input: clear message, non-zero exit, and
+//! nothing already written is touched.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn caustics(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_caustics"))
+        .args(args)
+        .output()
+        .expect("run caustics")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// An output folder holding an earlier `result.json` for `<scene>/<method>`.
+fn earlier_result(out: &Path, scene: &str, method: &str) -> std::path::PathBuf {
+    let dir = out.join(scene).join(method);
+    std::fs::create_dir_all(&dir).expect("mkdir");
+    let file = dir.join("result.json");
+    std::fs::write(&file, b"{\"earlier\": true}").expect("write");
+    file
+}
+
+fn assert_untouched(file: &Path) {
+    assert_eq!(
+        std::fs::read(file).expect("read"),
+        b"{\"earlier\": true}",
+        "{} was modified",
+        file.display()
+    );
+    let dir = file.parent().expect("parent");
+    let entries: Vec<_> = std::fs::read_dir(dir)
+        .expect("read_dir")
+        .map(|e| e.expect("entry").file_name())
+        .collect();
+    assert_eq!(entries.len(), 1, "unexpected files written: {entries:?}");
+}
+
+#[test]
+fn bad_scene_path_fails_clearly_and_keeps_results() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let out = tmp.path().to_str().expect("utf-8");
+    let earlier = earlier_result(tmp.path(), "water_pool", "wavefront");
+    let o = caustics(&[
+        "run",
+        "--scene",
+        "no/such/scene.json",
+        "--method",
+        "wavefront",
+        "--out",
+        out,
+    ]);
+    assert!(!o.status.success());
+    assert_ne!(
+        o.status.code(),
+        Some(3),
+        "a missing scene is an error, not a skip"
+    );
+    assert!(stderr(&o).contains("no/such/scene.json"), "{}", stderr(&o));
+    let o = caustics(&[
+        "run",
+        "--scene",
+        "no_such_builtin",
+        "--method",
+        "wavefront",
+        "--out",
+        out,
+    ]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("water_pool"),
+        "unknown scene should list the built-ins: {}",
+        stderr(&o)
+    );
+    assert_untouched(&earlier);
+}
+
+#[test]
+fn unknown_method_fails_listing_the_known_ones_and_keeps_results() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let out = tmp.path().to_str().expect("utf-8");
+    let earlier = earlier_result(tmp.path(), "water_pool", "wavefrnt");
+    let o = caustics(&[
+        "run",
+        "--scene",
+        "water_pool",
+        "--method",
+        "wavefrnt",
+        "--out",
+        out,
+    ]);
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    assert!(
+        e.contains("unknown method \"wavefrnt\"") && e.contains("wavefront"),
+        "{e}"
+    );
+    assert_untouched(&earlier);
+}
+
+#[test]
+fn bad_parameters_and_flags_fail_before_any_work() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let out = tmp.path().to_str().expect("utf-8");
+    let earlier = earlier_result(tmp.path(), "water_pool", "wavefront");
+    for (args, needle) in [
+        (vec!["--param", "grid=1"], "grid"),
+        (vec!["--param", "gird=64"], "known parameters"),
+        (vec!["--param", "grid"], "key=value"),
+        (vec!["--frames", "0"], "--frames"),
+        (vec!["--exposure", "-1"], "--exposure"),
+        (vec!["--reference", "missing.exr"], "missing.exr"),
+    ] {
+        let mut all = vec![
+            "run",
+            "--scene",
+            "water_pool",
+            "--method",
+            "wavefront",
+            "--out",
+            out,
+        ];
+        all.extend(args.iter());
+        let o = caustics(&all);
+        assert!(!o.status.success(), "{args:?} succeeded");
+        assert!(stderr(&o).contains(needle), "{args:?}: {}", stderr(&o));
+    }
+    assert_untouched(&earlier);
+}
+
+#[test]
+fn unsupported_scene_is_skipped_with_reason_and_exit_code_3() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let out = tmp.path().to_str().expect("utf-8");
+    let o = caustics(&[
+        "run",
+        "--scene",
+        "bumpy_glass",
+        "--method",
+        "wavefront",
+        "--out",
+        out,
+    ]);
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("skipped") && stderr(&o).contains("mesh"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(
+        std::fs::read_dir(tmp.path())
+            .expect("read_dir")
+            .next()
+            .is_none(),
+        "a skipped run wrote files"
+    );
+}
+
+#[test]
+fn list_shows_every_builtin_scene_and_method_defaults() {
+    let o = caustics(&["list"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let s = String::from_utf8_lossy(&o.stdout);
+    for name in caustics_scene::builtin_names() {
+        assert!(s.contains(&name), "{name} missing from list");
+    }
+    assert!(
+        s.contains("wavefront") && s.contains("--param grid=512"),
+        "{s}"
+    );
+    assert!(
+        !s.contains("does not load"),
+        "a built-in scene does not load:\n{s}"
+    );
+}

@@ -1,0 +1,229 @@
+//! Headless wgpu context: adapter choice, device features, adapter description.
+
+use crate::GpuError;
+
+/// Environment variable that picks an adapter by a substring of its name.
+pub const ADAPTER_ENV: &str = "CAUSTICS_ADAPTER";
+
+/// Features the harness needs from every adapter: method targets are `Rgba32Float`
+/// with additive blending (half floats lose caustic energy when many triangles
+/// or beams overlap a pixel).
+pub const REQUIRED_FEATURES: wgpu::Features = wgpu::Features::FLOAT32_BLENDABLE;
+
+/// Features used when present. Without them the matching figures are recorded as
+/// absent (never as 0): timestamps give per-pass GPU time, pipeline statistics give
+/// fragment-shader invocations and primitive counts per pass.
+pub const OPTIONAL_FEATURES: wgpu::Features = wgpu::Features::TIMESTAMP_QUERY
+    .union(wgpu::Features::PIPELINE_STATISTICS_QUERY)
+    .union(wgpu::Features::INDIRECT_FIRST_INSTANCE);
+
+/// Where the adapter filter came from, for messages.
+#[derive(Debug, Clone)]
+pub enum AdapterChoice {
+    /// Default: the first hardware adapter, else the first software one (lavapipe).
+    Default,
+    /// A substring of the adapter name, from the `--adapter` flag.
+    Flag(String),
+    /// A substring of the adapter name, from `CAUSTICS_ADAPTER`.
+    Env(String),
+}
+
+impl AdapterChoice {
+    /// The flag wins over the environment variable, which wins over the default.
+    pub fn from_flag_or_env(flag: Option<&str>) -> Self {
+        if let Some(f) = flag.filter(|f| !f.is_empty()) {
+            return Self::Flag(f.to_owned());
+        }
+        match std::env::var(ADAPTER_ENV) {
+            Ok(v) if !v.is_empty() => Self::Env(v),
+            _ => Self::Default,
+        }
+    }
+}
+
+/// The adapter, device and queue every pass runs on.
+pub struct GpuContext {
+    /// The adapter that was chosen.
+    pub adapter: wgpu::Adapter,
+    /// The logical device.
+    pub device: wgpu::Device,
+    /// Its queue.
+    pub queue: wgpu::Queue,
+    /// What the adapter is, for result files.
+    pub summary: AdapterSummary,
+    /// Features enabled on the device.
+    pub features: wgpu::Features,
+}
+
+/// Adapter facts, as strings so result files stay stable across wgpu versions.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct AdapterSummary {
+    /// Adapter name, e.g. "llvmpipe (LLVM 15.0.6, 256 bits)".
+    pub name: String,
+    /// Backend, e.g. "Vulkan".
+    pub backend: String,
+    /// Device type, e.g. "Cpu" or "DiscreteGpu".
+    pub device_type: String,
+    /// Driver name.
+    pub driver: String,
+    /// Driver version string.
+    pub driver_info: String,
+}
+
+fn summary(info: &wgpu::AdapterInfo) -> AdapterSummary {
+    AdapterSummary {
+        name: info.name.clone(),
+        backend: format!("{:?}", info.backend),
+        device_type: format!("{:?}", info.device_type),
+        driver: info.driver.clone(),
+        driver_info: info.driver_info.clone(),
+    }
+}
+
+fn is_hardware(t: wgpu::DeviceType) -> bool {
+    matches!(
+        t,
+        wgpu::DeviceType::DiscreteGpu
+            | wgpu::DeviceType::IntegratedGpu
+            | wgpu::DeviceType::VirtualGpu
+    )
+}
+
+impl GpuContext {
+    /// Opens a device on the adapter picked by `choice`.
+    pub fn new(choice: &AdapterChoice) -> Result<Self, GpuError> {
+        pollster::block_on(Self::new_async(choice))
+    }
+
+    async fn new_async(choice: &AdapterChoice) -> Result<Self, GpuError> {
+        let backends = wgpu::Backends::VULKAN | wgpu::Backends::METAL | wgpu::Backends::DX12;
+        let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
+        desc.backends = backends;
+        let instance = wgpu::Instance::new(desc);
+        let adapters = instance.enumerate_adapters(backends).await;
+        if adapters.is_empty() {
+            return Err(GpuError::NoAdapter {
+                backends: format!("{backends:?}"),
+            });
+        }
+        let names: Vec<String> = adapters
+            .iter()
+            .map(|a| {
+                let i = a.get_info();
+                format!("{} ({:?}, {:?})", i.name, i.backend, i.device_type)
+            })
+            .collect();
+        let adapter = match choice {
+            AdapterChoice::Default => {
+                let hw = adapters
+                    .iter()
+                    .position(|a| is_hardware(a.get_info().device_type));
+                let idx = hw.unwrap_or(0);
+                adapters.into_iter().nth(idx)
+            }
+            AdapterChoice::Flag(s) | AdapterChoice::Env(s) => {
+                let wanted = s.to_lowercase();
+                let found = adapters
+                    .into_iter()
+                    .find(|a| a.get_info().name.to_lowercase().contains(&wanted));
+                if found.is_none() {
+                    return Err(GpuError::AdapterNotFound {
+                        wanted: s.clone(),
+                        source_of_filter: match choice {
+                            AdapterChoice::Flag(_) => "--adapter".into(),
+                            _ => ADAPTER_ENV.into(),
+                        },
+                        available: names.join("; "),
+                    });
+                }
+                found
+            }
+        }
+        .ok_or_else(|| GpuError::NoAdapter {
+            backends: format!("{backends:?}"),
+        })?;
+
+        let info = adapter.get_info();
+        let available = adapter.features();
+        if !available.contains(REQUIRED_FEATURES) {
+            return Err(GpuError::MissingFeatures {
+                adapter: info.name.clone(),
+                missing: REQUIRED_FEATURES - available,
+            });
+        }
+        let features = REQUIRED_FEATURES | (OPTIONAL_FEATURES & available);
+        let adapter_limits = adapter.limits();
+        let limits = wgpu::Limits {
+            max_storage_buffers_per_shader_stage: adapter_limits
+                .max_storage_buffers_per_shader_stage
+                .min(16),
+            max_storage_buffer_binding_size: adapter_limits.max_storage_buffer_binding_size,
+            max_buffer_size: adapter_limits.max_buffer_size,
+            max_texture_array_layers: adapter_limits.max_texture_array_layers,
+            max_color_attachment_bytes_per_sample: adapter_limits
+                .max_color_attachment_bytes_per_sample,
+            ..wgpu::Limits::default()
+        };
+        let (device, queue) = adapter
+            .request_device(&wgpu::DeviceDescriptor {
+                label: Some("caustics-bench"),
+                required_features: features,
+                required_limits: limits,
+                ..Default::default()
+            })
+            .await
+            .map_err(|source| GpuError::RequestDevice {
+                adapter: info.name.clone(),
+                source,
+            })?;
+        Ok(Self {
+            summary: summary(&info),
+            adapter,
+            device,
+            queue,
+            features,
+        })
+    }
+
+    /// Whether per-pass timestamps can be taken.
+    pub fn has_timestamps(&self) -> bool {
+        self.features.contains(wgpu::Features::TIMESTAMP_QUERY)
+    }
+
+    /// Whether pipeline statistics (fragment invocations, primitives) can be taken.
+    pub fn has_pipeline_statistics(&self) -> bool {
+        self.features
+            .contains(wgpu::Features::PIPELINE_STATISTICS_QUERY)
+    }
+
+    /// Runs `f` inside validation and out-of-memory error scopes and turns what wgpu
+    /// reports into a typed error, so a bad pipeline is an error naming `what`, not a panic.
+    pub fn checked<T>(&self, what: &str, f: impl FnOnce() -> T) -> Result<T, GpuError> {
+        let oom = self.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+        let val = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let out = f();
+        let validation = pollster::block_on(val.pop());
+        let memory = pollster::block_on(oom.pop());
+        for (kind, err) in [("validation", validation), ("out of memory", memory)] {
+            if let Some(e) = err {
+                return Err(GpuError::Validation {
+                    kind,
+                    what: what.to_owned(),
+                    message: e.to_string(),
+                });
+            }
+        }
+        Ok(out)
+    }
+
+    /// Blocks until all submitted work is done.
+    pub fn wait_idle(&self) -> Result<(), GpuError> {
+        self.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map(|_| ())
+            .map_err(|e| GpuError::Readback {
+                what: "device poll".into(),
+                message: e.to_string(),
+            })
+    }
+}

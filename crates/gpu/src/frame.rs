@@ -1,0 +1,173 @@
+//! One frame being recorded: the encoder, the profiler scopes and the frame's mode.
+//! Every pass of the base renderer and of a method is opened through
+//! [`Frame::render_pass`] or [`Frame::compute_pass`], which wrap it in timestamps
+//! (timed frames) or pipeline statistics (count frames).
+
+use std::ops::{Deref, DerefMut};
+use std::time::Instant;
+
+use crate::profiling::{FrameMode, PassProfiler};
+use crate::renderer::Renderer;
+use crate::{GpuContext, GpuError};
+
+/// A frame under construction.
+pub struct Frame<'a> {
+    /// The frame's command encoder (one submission per frame).
+    pub encoder: wgpu::CommandEncoder,
+    /// Timed or count frame.
+    pub mode: FrameMode,
+    /// The shared resources: scene, G-buffers, targets, group-0 bind group.
+    pub renderer: &'a Renderer,
+    profiler: &'a mut PassProfiler,
+    started: Instant,
+}
+
+/// A render pass that ends its pipeline-statistics query when dropped.
+pub struct ProfiledRenderPass<'e> {
+    pass: wgpu::RenderPass<'e>,
+    statistics: bool,
+}
+
+impl<'e> Deref for ProfiledRenderPass<'e> {
+    type Target = wgpu::RenderPass<'e>;
+    fn deref(&self) -> &Self::Target {
+        &self.pass
+    }
+}
+impl DerefMut for ProfiledRenderPass<'_> {
+    fn deref_mut(&mut self) -> &mut Self::Target {
+        &mut self.pass
+    }
+}
+impl Drop for ProfiledRenderPass<'_> {
+    fn drop(&mut self) {
+        if self.statistics {
+            self.pass.end_pipeline_statistics_query();
+        }
+    }
+}
+
+/// A compute pass that ends its pipeline-statistics query when dropped.
+pub struct ProfiledComputePass<'e> {
+    pass: wgpu::ComputePass<'e>,
+    statistics: bool,
+}
+
+impl<'e> Deref for ProfiledComputePass<'e> {
+    type Target = wgpu::ComputePass<'e>;
+    fn deref(&self) -> &Self::Target {
+        &self.pass
+    }
+}
+impl DerefMut for ProfiledComputePass<'_> {
+    fn deref_mut(&mut self) -> &mut Self::Target {
+        &mut self.pass
+    }
+}
+impl Drop for ProfiledComputePass<'_> {
+    fn drop(&mut self) {
+        if self.statistics {
+            self.pass.end_pipeline_statistics_query();
+        }
+    }
+}
+
+impl<'a> Frame<'a> {
+    pub(crate) fn new(
+        renderer: &'a Renderer,
+        profiler: &'a mut PassProfiler,
+        mode: FrameMode,
+    ) -> Result<Self, GpuError> {
+        profiler.begin_frame(mode)?;
+        let encoder =
+            renderer
+                .ctx_device()
+                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                    label: Some("frame"),
+                });
+        Ok(Self {
+            encoder,
+            mode,
+            renderer,
+            profiler,
+            started: Instant::now(),
+        })
+    }
+
+    /// Whether fill-rate counting pipelines should be used in this frame.
+    pub fn counting(&self) -> bool {
+        self.mode == FrameMode::Count
+    }
+
+    /// Opens a named, profiled render pass. `name` is "<owner>/<pass>", e.g.
+    /// "wavefront/splat". The descriptor's `timestamp_writes` is set here.
+    pub fn render_pass(
+        &mut self,
+        name: &str,
+        desc: wgpu::RenderPassDescriptor<'_>,
+    ) -> Result<ProfiledRenderPass<'_>, GpuError> {
+        let (index, mode) = self.profiler.open_pass(name)?;
+        let ts = self.profiler.timestamp_set(mode);
+        let full = wgpu::RenderPassDescriptor {
+            label: Some(name),
+            color_attachments: desc.color_attachments,
+            depth_stencil_attachment: desc.depth_stencil_attachment,
+            timestamp_writes: ts.map(|query_set| wgpu::RenderPassTimestampWrites {
+                query_set,
+                beginning_of_pass_write_index: Some(2 * index),
+                end_of_pass_write_index: Some(2 * index + 1),
+            }),
+            occlusion_query_set: desc.occlusion_query_set,
+            multiview_mask: desc.multiview_mask,
+        };
+        let mut pass = self.encoder.begin_render_pass(&full);
+        let stats = self.profiler.statistics_set(mode);
+        if let Some(set) = stats {
+            pass.begin_pipeline_statistics_query(set, index);
+        }
+        Ok(ProfiledRenderPass {
+            pass,
+            statistics: stats.is_some(),
+        })
+    }
+
+    /// Opens a named, profiled compute pass.
+    pub fn compute_pass(&mut self, name: &str) -> Result<ProfiledComputePass<'_>, GpuError> {
+        let (index, mode) = self.profiler.open_pass(name)?;
+        let ts = self.profiler.timestamp_set(mode);
+        let mut pass = self
+            .encoder
+            .begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some(name),
+                timestamp_writes: ts.map(|query_set| wgpu::ComputePassTimestampWrites {
+                    query_set,
+                    beginning_of_pass_write_index: Some(2 * index),
+                    end_of_pass_write_index: Some(2 * index + 1),
+                }),
+            });
+        let stats = self.profiler.statistics_set(mode);
+        if let Some(set) = stats {
+            pass.begin_pipeline_statistics_query(set, index);
+        }
+        Ok(ProfiledComputePass {
+            pass,
+            statistics: stats.is_some(),
+        })
+    }
+
+    /// Submits the frame, waits for it (frames do not overlap, so each is timed
+    /// alone), then resolves its queries in a later submission.
+    pub fn submit(self, ctx: &GpuContext) -> Result<(), GpuError> {
+        let Frame {
+            encoder,
+            profiler,
+            started,
+            ..
+        } = self;
+        ctx.queue.submit([encoder.finish()]);
+        ctx.wait_idle()?;
+        let wall_ms = started.elapsed().as_secs_f64() * 1e3;
+        profiler.resolve_frame(ctx, wall_ms);
+        Ok(())
+    }
+}

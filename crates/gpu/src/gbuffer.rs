@@ -1,0 +1,434 @@
+//! Camera and light-space G-buffers: world position, smooth normal, object and
+//! material ids and depth, rasterized from any view. A light's view is general:
+//! orthographic for a directional light, one perspective face for a spot light,
+//! six perspective faces (a cube) for a point light.
+
+use bytemuck::{Pod, Zeroable};
+use caustics_scene::{Aabb, Camera, Light, Mat4, Vec3};
+use wgpu::util::DeviceExt;
+
+use crate::GpuError;
+use crate::frame::Frame;
+use crate::scene_upload::{GpuScene, SceneVertex};
+use crate::shader;
+use crate::textures::{DEPTH_FORMAT, IDS_FORMAT, NORMAL_FORMAT, POSITION_FORMAT, Target};
+
+/// Uniforms of one rasterized view (matches `View` in gbuffer.wgsl).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct ViewUniform {
+    /// World to clip.
+    pub view_proj: [[f32; 4]; 4],
+    /// Eye position (perspective) or the view's centre (orthographic).
+    pub eye: [f32; 4],
+}
+
+/// How a light G-buffer projects.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LightProjection {
+    /// Directional light: one orthographic face.
+    Orthographic,
+    /// Spot light: one perspective face covering the cone.
+    Perspective,
+    /// Point light: six 90° perspective faces, order +X, −X, +Y, −Y, +Z, −Z.
+    Cube,
+}
+
+/// One face of a light's view.
+#[derive(Clone, Copy, Debug)]
+pub struct LightFace {
+    /// World to view.
+    pub view: Mat4,
+    /// View to clip (depth 0..1).
+    pub proj: Mat4,
+    /// World to clip.
+    pub view_proj: Mat4,
+}
+
+/// A light's view: faces, resolution and texel footprint.
+#[derive(Clone, Debug)]
+pub struct LightView {
+    /// Projection kind.
+    pub projection: LightProjection,
+    /// 1 or 6 faces.
+    pub faces: Vec<LightFace>,
+    /// Square resolution of each face (texels).
+    pub resolution: u32,
+    /// World size of a texel: in metres for orthographic views, per metre of distance
+    /// from the light for perspective ones.
+    pub texel_size: f32,
+    /// Light position (point/spot) or the centre of the fitted volume (directional).
+    pub origin: Vec3,
+}
+
+fn any_up(dir: Vec3) -> Vec3 {
+    if dir.y.abs() < 0.99 { Vec3::Y } else { Vec3::Z }
+}
+
+impl LightView {
+    /// Fits the light's view around `bounds` (e.g. the whole scene for shadows, or
+    /// only the specular objects for photon generation).
+    pub fn fit(light: &Light, bounds: &Aabb, resolution: u32) -> Self {
+        let center = bounds.center();
+        let radius = bounds.bounding_sphere_radius().max(1e-3);
+        let far_from = |p: Vec3| {
+            let corners = [bounds.min, bounds.max];
+            let mut far = 0.0f32;
+            for i in 0..8 {
+                let c = Vec3::new(
+                    corners[i & 1].x,
+                    corners[(i >> 1) & 1].y,
+                    corners[(i >> 2) & 1].z,
+                );
+                far = far.max((c - p).length());
+            }
+            far * 1.01 + 1e-3
+        };
+        match *light {
+            Light::Directional { direction, .. } => {
+                let eye = center - direction * (2.0 * radius);
+                let view = Mat4::look_at_rh(eye, center, any_up(direction));
+                let proj =
+                    Mat4::orthographic_rh(-radius, radius, -radius, radius, 0.0, 4.0 * radius);
+                Self {
+                    projection: LightProjection::Orthographic,
+                    faces: vec![LightFace {
+                        view,
+                        proj,
+                        view_proj: proj * view,
+                    }],
+                    resolution,
+                    texel_size: 2.0 * radius / resolution as f32,
+                    origin: center,
+                }
+            }
+            Light::Spot {
+                position,
+                direction,
+                cone_deg,
+                ..
+            } => {
+                let fov = (2.0 * cone_deg).clamp(1.0, 170.0).to_radians();
+                let far = far_from(position);
+                let near = (far * 1e-4).max(1e-4);
+                let view = Mat4::look_at_rh(position, position + direction, any_up(direction));
+                let proj = Mat4::perspective_rh(fov, 1.0, near, far);
+                Self {
+                    projection: LightProjection::Perspective,
+                    faces: vec![LightFace {
+                        view,
+                        proj,
+                        view_proj: proj * view,
+                    }],
+                    resolution,
+                    texel_size: 2.0 * (fov * 0.5).tan() / resolution as f32,
+                    origin: position,
+                }
+            }
+            Light::Point { position, .. } => {
+                let far = far_from(position);
+                let near = (far * 1e-4).max(1e-4);
+                let proj = Mat4::perspective_rh(std::f32::consts::FRAC_PI_2, 1.0, near, far);
+                let dirs = [Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z];
+                let faces = dirs
+                    .iter()
+                    .map(|&d| {
+                        let view = Mat4::look_at_rh(position, position + d, any_up(d));
+                        LightFace {
+                            view,
+                            proj,
+                            view_proj: proj * view,
+                        }
+                    })
+                    .collect();
+                Self {
+                    projection: LightProjection::Cube,
+                    faces,
+                    resolution,
+                    texel_size: 2.0 / resolution as f32,
+                    origin: position,
+                }
+            }
+        }
+    }
+}
+
+/// The targets of a G-buffer (one layer per view face).
+pub struct GBuffer {
+    /// World position and hit flag.
+    pub position: Target,
+    /// Normal and side seen.
+    pub normal: Target,
+    /// Object and material ids.
+    pub ids: Target,
+    /// Depth (for a light: the shadow map).
+    pub depth: Target,
+    /// View uniforms, one per layer.
+    views: Vec<(wgpu::Buffer, wgpu::BindGroup)>,
+    /// Width, height.
+    pub size: (u32, u32),
+}
+
+impl GBuffer {
+    /// Bytes of GPU memory owned.
+    pub fn bytes(&self) -> u64 {
+        self.position.bytes + self.normal.bytes + self.ids.bytes + self.depth.bytes
+    }
+
+    /// Number of layers (faces).
+    pub fn layers(&self) -> u32 {
+        self.views.len() as u32
+    }
+}
+
+/// The G-buffer rasterization pipeline, shared by camera and light views.
+pub struct GBufferPass {
+    pipeline: wgpu::RenderPipeline,
+    layout: wgpu::BindGroupLayout,
+}
+
+impl GBufferPass {
+    /// Builds the pipeline.
+    pub fn new(device: &wgpu::Device) -> Self {
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("gbuffer view"),
+            entries: &[wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: wgpu::ShaderStages::VERTEX,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Uniform,
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
+                count: None,
+            }],
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("gbuffer"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let module = shader::module(
+            device,
+            "gbuffer.wgsl",
+            shader::compose(shader::GBUFFER_WGSL),
+        );
+        let target = |format| {
+            Some(wgpu::ColorTargetState {
+                format,
+                blend: None,
+                write_mask: wgpu::ColorWrites::ALL,
+            })
+        };
+        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("gbuffer"),
+            layout: Some(&pipeline_layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_main"),
+                compilation_options: Default::default(),
+                buffers: &[Some(SceneVertex::LAYOUT)],
+            },
+            primitive: wgpu::PrimitiveState {
+                topology: wgpu::PrimitiveTopology::TriangleList,
+                front_face: wgpu::FrontFace::Ccw,
+                // Open cylinders, quads and heightfields are seen from both sides.
+                cull_mode: None,
+                ..Default::default()
+            },
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: DEPTH_FORMAT,
+                depth_write_enabled: Some(true),
+                depth_compare: Some(wgpu::CompareFunction::Less),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs_main"),
+                compilation_options: Default::default(),
+                targets: &[
+                    target(POSITION_FORMAT),
+                    target(NORMAL_FORMAT),
+                    target(IDS_FORMAT),
+                ],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        Self { pipeline, layout }
+    }
+
+    fn allocate(
+        &self,
+        device: &wgpu::Device,
+        label: &str,
+        width: u32,
+        height: u32,
+        views: &[ViewUniform],
+    ) -> GBuffer {
+        let layers = views.len() as u32;
+        let none = wgpu::TextureUsages::empty();
+        let views = views
+            .iter()
+            .map(|v| {
+                let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some(label),
+                    contents: bytemuck::bytes_of(v),
+                    usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                });
+                let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some(label),
+                    layout: &self.layout,
+                    entries: &[wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: buffer.as_entire_binding(),
+                    }],
+                });
+                (buffer, bind)
+            })
+            .collect();
+        GBuffer {
+            position: Target::new(
+                device,
+                &format!("{label} position"),
+                POSITION_FORMAT,
+                width,
+                height,
+                layers,
+                none,
+            ),
+            normal: Target::new(
+                device,
+                &format!("{label} normal"),
+                NORMAL_FORMAT,
+                width,
+                height,
+                layers,
+                none,
+            ),
+            ids: Target::new(
+                device,
+                &format!("{label} ids"),
+                IDS_FORMAT,
+                width,
+                height,
+                layers,
+                none,
+            ),
+            depth: Target::new(
+                device,
+                &format!("{label} depth"),
+                DEPTH_FORMAT,
+                width,
+                height,
+                layers,
+                none,
+            ),
+            views,
+            size: (width, height),
+        }
+    }
+
+    /// Allocates the camera G-buffer at the camera's resolution.
+    pub fn camera_gbuffer(
+        &self,
+        device: &wgpu::Device,
+        camera: &Camera,
+        near: f32,
+        far: f32,
+    ) -> GBuffer {
+        let vp = camera.projection(near, far) * camera.view();
+        let u = ViewUniform {
+            view_proj: vp.to_cols_array_2d(),
+            eye: camera.eye.extend(1.0).to_array(),
+        };
+        self.allocate(device, "camera gbuffer", camera.width, camera.height, &[u])
+    }
+
+    /// Allocates a light G-buffer, one layer per face of `view`.
+    pub fn light_gbuffer(&self, device: &wgpu::Device, view: &LightView) -> GBuffer {
+        let us: Vec<ViewUniform> = view
+            .faces
+            .iter()
+            .map(|f| ViewUniform {
+                view_proj: f.view_proj.to_cols_array_2d(),
+                eye: view.origin.extend(1.0).to_array(),
+            })
+            .collect();
+        self.allocate(
+            device,
+            "light gbuffer",
+            view.resolution,
+            view.resolution,
+            &us,
+        )
+    }
+
+    /// Records the rasterization of every object into each layer of `gbuffer`, one
+    /// profiled render pass per layer named `name`.
+    pub fn record(
+        &self,
+        frame: &mut Frame<'_>,
+        name: &str,
+        scene: &GpuScene,
+        gbuffer: &GBuffer,
+    ) -> Result<(), GpuError> {
+        for (layer, (_, bind)) in gbuffer.views.iter().enumerate() {
+            fn color(
+                view: &wgpu::TextureView,
+                clear: wgpu::Color,
+            ) -> Option<wgpu::RenderPassColorAttachment<'_>> {
+                Some(wgpu::RenderPassColorAttachment {
+                    view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(clear),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })
+            }
+            let none_id = f64::from(u32::MAX);
+            let attachments = [
+                color(
+                    &gbuffer.position.layer_views[layer],
+                    wgpu::Color::TRANSPARENT,
+                ),
+                color(&gbuffer.normal.layer_views[layer], wgpu::Color::TRANSPARENT),
+                color(
+                    &gbuffer.ids.layer_views[layer],
+                    wgpu::Color {
+                        r: none_id,
+                        g: none_id,
+                        b: 0.0,
+                        a: 0.0,
+                    },
+                ),
+            ];
+            let desc = wgpu::RenderPassDescriptor {
+                label: None,
+                color_attachments: &attachments,
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &gbuffer.depth.layer_views[layer],
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(1.0),
+                        store: wgpu::StoreOp::Store,
+                    }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            };
+            let mut pass = frame.render_pass(name, desc)?;
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, bind, &[]);
+            pass.set_vertex_buffer(0, scene.vertex_buffer.slice(..));
+            pass.set_index_buffer(scene.index_buffer.slice(..), wgpu::IndexFormat::Uint32);
+            pass.draw_indexed(0..scene.index_count, 0, 0..1);
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,297 @@
+//! Per-pass instrumentation owned by the harness, so every method is measured alike:
+//! GPU timestamps around each named pass (timed frames) and pipeline statistics
+//! (fragment-shader invocations, primitives, compute invocations) per pass (count
+//! frames). Queries are resolved in a submission of their own after the frame's,
+//! into one results buffer that is read back once after all frames.
+//!
+//! Why not `wgpu-profiler`: it covers timer queries only, and we need timestamps and
+//! pipeline statistics behind the same per-pass scope so that the figures of a pass
+//! line up by name; it also resolves inside the frame's own encoder.
+
+use crate::{GpuContext, GpuError};
+
+/// Most passes one frame may open.
+pub const MAX_PASSES_PER_FRAME: u32 = 32;
+/// Values of one pipeline-statistics query, in `STATISTICS` bit order.
+const STATS_PER_QUERY: u64 = 5;
+/// The statistics gathered (results come back in this bit order).
+pub const STATISTICS: wgpu::PipelineStatisticsTypes =
+    wgpu::PipelineStatisticsTypes::VERTEX_SHADER_INVOCATIONS
+        .union(wgpu::PipelineStatisticsTypes::CLIPPER_INVOCATIONS)
+        .union(wgpu::PipelineStatisticsTypes::CLIPPER_PRIMITIVES_OUT)
+        .union(wgpu::PipelineStatisticsTypes::FRAGMENT_SHADER_INVOCATIONS)
+        .union(wgpu::PipelineStatisticsTypes::COMPUTE_SHADER_INVOCATIONS);
+
+const TS_BYTES_PER_FRAME: u64 = MAX_PASSES_PER_FRAME as u64 * 2 * 8;
+const STATS_BYTES_PER_FRAME: u64 = MAX_PASSES_PER_FRAME as u64 * STATS_PER_QUERY * 8;
+
+/// What a frame measures (DESIGN "Measuring honestly": time with counting off,
+/// count with it on, in separate frames).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FrameMode {
+    /// Timestamps on; pipeline statistics and fill counting off.
+    Timed,
+    /// Pipeline statistics and per-pixel fill counting on; no timestamps.
+    Count,
+}
+
+/// Pipeline statistics of one pass.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct PassStatistics {
+    /// Vertex shader invocations.
+    pub vertex_invocations: u64,
+    /// Primitives that entered clipping.
+    pub clipper_invocations: u64,
+    /// Primitives that left clipping (rasterized).
+    pub primitives_out: u64,
+    /// Fragment shader invocations.
+    pub fragment_invocations: u64,
+    /// Compute shader invocations.
+    pub compute_invocations: u64,
+}
+
+/// One pass of one measured frame.
+#[derive(Clone, Debug)]
+pub struct PassSample {
+    /// Pass name, "<owner>/<pass>".
+    pub name: String,
+    /// GPU time (ms) from the pass's timestamps; `None` when the adapter has no
+    /// timestamps, or the sample was rejected (zero or non-monotonic timestamps).
+    pub gpu_ms: Option<f64>,
+    /// Raw begin/end ticks, for the frame span.
+    pub ticks: Option<(u64, u64)>,
+    /// Pipeline statistics (count frames only, when supported).
+    pub statistics: Option<PassStatistics>,
+}
+
+/// Everything measured in one frame.
+#[derive(Clone, Debug)]
+pub struct FrameSample {
+    /// How the frame was run.
+    pub mode: FrameMode,
+    /// Its passes, in recording order.
+    pub passes: Vec<PassSample>,
+    /// CPU wall time from the start of recording to the end of the GPU work (ms).
+    pub wall_ms: f64,
+    /// Timestamps rejected in this frame (zero or end before begin).
+    pub rejected_timestamps: u32,
+}
+
+struct FrameRecord {
+    mode: FrameMode,
+    passes: Vec<String>,
+    wall_ms: f64,
+}
+
+/// Query sets and result buffers for up to `max_frames` frames.
+pub struct PassProfiler {
+    timestamps: Option<wgpu::QuerySet>,
+    statistics: Option<wgpu::QuerySet>,
+    ts_results: Option<wgpu::Buffer>,
+    stats_results: Option<wgpu::Buffer>,
+    period_ns: f64,
+    max_frames: u32,
+    frames: Vec<FrameRecord>,
+    open: Option<FrameRecord>,
+}
+
+impl PassProfiler {
+    /// Allocates queries for up to `max_frames` frames (timed and count frames together).
+    pub fn new(ctx: &GpuContext, max_frames: u32) -> Self {
+        let device = &ctx.device;
+        let timestamps = ctx.has_timestamps().then(|| {
+            device.create_query_set(&wgpu::QuerySetDescriptor {
+                label: Some("pass timestamps"),
+                ty: wgpu::QueryType::Timestamp,
+                count: MAX_PASSES_PER_FRAME * 2,
+            })
+        });
+        let statistics = ctx.has_pipeline_statistics().then(|| {
+            device.create_query_set(&wgpu::QuerySetDescriptor {
+                label: Some("pass statistics"),
+                ty: wgpu::QueryType::PipelineStatistics(STATISTICS),
+                count: MAX_PASSES_PER_FRAME,
+            })
+        });
+        let results = |label: &str, per_frame: u64| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: per_frame * max_frames.max(1) as u64,
+                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            })
+        };
+        let ts_results = timestamps
+            .as_ref()
+            .map(|_| results("timestamp results", TS_BYTES_PER_FRAME));
+        let stats_results = statistics
+            .as_ref()
+            .map(|_| results("statistics results", STATS_BYTES_PER_FRAME));
+        Self {
+            timestamps,
+            statistics,
+            ts_results,
+            stats_results,
+            period_ns: ctx.queue.get_timestamp_period() as f64,
+            max_frames,
+            frames: Vec::new(),
+            open: None,
+        }
+    }
+
+    /// Whether timestamps are taken at all.
+    pub fn has_timestamps(&self) -> bool {
+        self.timestamps.is_some()
+    }
+
+    pub(crate) fn begin_frame(&mut self, mode: FrameMode) -> Result<(), GpuError> {
+        if self.frames.len() as u32 >= self.max_frames {
+            return Err(GpuError::ProfilerCapacity(format!(
+                "more than {} frames",
+                self.max_frames
+            )));
+        }
+        self.open = Some(FrameRecord {
+            mode,
+            passes: Vec::new(),
+            wall_ms: 0.0,
+        });
+        Ok(())
+    }
+
+    /// Registers a pass; returns its index in the frame.
+    pub(crate) fn open_pass(&mut self, name: &str) -> Result<(u32, FrameMode), GpuError> {
+        let rec = self
+            .open
+            .as_mut()
+            .ok_or_else(|| GpuError::ProfilerCapacity("pass opened outside a frame".into()))?;
+        if rec.passes.len() as u32 >= MAX_PASSES_PER_FRAME {
+            return Err(GpuError::ProfilerCapacity(format!(
+                "more than {MAX_PASSES_PER_FRAME} passes in a frame"
+            )));
+        }
+        rec.passes.push(name.to_owned());
+        Ok((rec.passes.len() as u32 - 1, rec.mode))
+    }
+
+    pub(crate) fn timestamp_set(&self, mode: FrameMode) -> Option<&wgpu::QuerySet> {
+        (mode == FrameMode::Timed)
+            .then_some(self.timestamps.as_ref())
+            .flatten()
+    }
+
+    pub(crate) fn statistics_set(&self, mode: FrameMode) -> Option<&wgpu::QuerySet> {
+        (mode == FrameMode::Count)
+            .then_some(self.statistics.as_ref())
+            .flatten()
+    }
+
+    /// Resolves the open frame's queries into the results buffers, in an encoder of its
+    /// own (submitted after the frame's), and closes the frame.
+    pub(crate) fn resolve_frame(&mut self, ctx: &GpuContext, wall_ms: f64) {
+        let Some(mut rec) = self.open.take() else {
+            return;
+        };
+        rec.wall_ms = wall_ms;
+        let frame = self.frames.len() as u64;
+        let n = rec.passes.len() as u32;
+        let mut encoder = ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("resolve queries"),
+            });
+        if n > 0 {
+            if let (Some(set), Some(buf), FrameMode::Timed) =
+                (&self.timestamps, &self.ts_results, rec.mode)
+            {
+                encoder.resolve_query_set(set, 0..2 * n, buf, frame * TS_BYTES_PER_FRAME);
+            }
+            if let (Some(set), Some(buf), FrameMode::Count) =
+                (&self.statistics, &self.stats_results, rec.mode)
+            {
+                encoder.resolve_query_set(set, 0..n, buf, frame * STATS_BYTES_PER_FRAME);
+            }
+        }
+        ctx.queue.submit([encoder.finish()]);
+        self.frames.push(rec);
+    }
+
+    /// Reads all results back (once, after the measured frames) and clears the profiler.
+    pub fn collect(&mut self, ctx: &GpuContext) -> Result<Vec<FrameSample>, GpuError> {
+        let frames = std::mem::take(&mut self.frames);
+        let used = frames.len() as u64;
+        let ts = match &self.ts_results {
+            Some(b) if used > 0 => Some(crate::readback::read_buffer_u64(
+                ctx,
+                b,
+                used * TS_BYTES_PER_FRAME,
+                "timestamps",
+            )?),
+            _ => None,
+        };
+        let st = match &self.stats_results {
+            Some(b) if used > 0 => Some(crate::readback::read_buffer_u64(
+                ctx,
+                b,
+                used * STATS_BYTES_PER_FRAME,
+                "pipeline statistics",
+            )?),
+            _ => None,
+        };
+        let ts_per_frame = (TS_BYTES_PER_FRAME / 8) as usize;
+        let st_per_frame = (STATS_BYTES_PER_FRAME / 8) as usize;
+        let mut out = Vec::with_capacity(frames.len());
+        for (f, rec) in frames.into_iter().enumerate() {
+            let mut rejected = 0;
+            let passes = rec
+                .passes
+                .into_iter()
+                .enumerate()
+                .map(|(p, name)| {
+                    let mut sample = PassSample {
+                        name,
+                        gpu_ms: None,
+                        ticks: None,
+                        statistics: None,
+                    };
+                    if let (Some(ts), FrameMode::Timed) = (&ts, rec.mode) {
+                        let begin = ts[f * ts_per_frame + 2 * p];
+                        let end = ts[f * ts_per_frame + 2 * p + 1];
+                        // Zero means "never written"; end < begin happens on some drivers
+                        // across power-state changes. Both are rejected, never reported as 0.
+                        // end == begin is a pass shorter than one tick, and is kept.
+                        if begin != 0 && end >= begin {
+                            sample.gpu_ms = Some((end - begin) as f64 * self.period_ns * 1e-6);
+                            sample.ticks = Some((begin, end));
+                        } else {
+                            rejected += 1;
+                        }
+                    }
+                    if let (Some(st), FrameMode::Count) = (&st, rec.mode) {
+                        let b = f * st_per_frame + p * STATS_PER_QUERY as usize;
+                        sample.statistics = Some(PassStatistics {
+                            vertex_invocations: st[b],
+                            clipper_invocations: st[b + 1],
+                            primitives_out: st[b + 2],
+                            fragment_invocations: st[b + 3],
+                            compute_invocations: st[b + 4],
+                        });
+                    }
+                    sample
+                })
+                .collect();
+            out.push(FrameSample {
+                mode: rec.mode,
+                passes,
+                wall_ms: rec.wall_ms,
+                rejected_timestamps: rejected,
+            });
+        }
+        Ok(out)
+    }
+
+    /// Ticks → milliseconds.
+    pub fn ticks_to_ms(&self, ticks: u64) -> f64 {
+        ticks as f64 * self.period_ns * 1e-6
+    }
+}

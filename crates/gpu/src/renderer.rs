@@ -1,0 +1,614 @@
+//! The base renderer every method runs on top of: the camera G-buffer, the light
+//! G-buffers (whose depth is the shadow map), direct lighting, the HDR targets, the
+//! fill-rate counter and the group-0 bind group that method passes share.
+
+use bytemuck::{Pod, Zeroable};
+use caustics_scene::Vec3;
+use wgpu::util::DeviceExt;
+
+use crate::frame::Frame;
+use crate::gbuffer::{GBuffer, GBufferPass, LightProjection, LightView};
+use crate::profiling::{FrameMode, PassProfiler};
+use crate::scene_upload::{GpuLight, GpuScene, gpu_light};
+use crate::shader;
+use crate::textures::{HDR_FORMAT, RadianceTargets};
+use crate::{GpuContext, GpuError};
+
+/// Matches `FrameUniforms` in frame.wgsl.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct FrameUniforms {
+    /// Camera world → clip.
+    pub view_proj: [[f32; 4]; 4],
+    /// Eye (xyz), vertical field of view in radians (w).
+    pub eye: [f32; 4],
+    /// Unit forward axis (xyz).
+    pub forward: [f32; 4],
+    /// Width, height, 1/width, 1/height.
+    pub resolution: [f32; 4],
+    /// Object, material, light and wave counts.
+    pub counts: [u32; 4],
+}
+
+/// Matches `DirectLight` in direct.wgsl.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct DirectUniform {
+    light: GpuLight,
+    face_view_proj: [[[f32; 4]; 4]; 6],
+    params: [f32; 4],
+}
+
+/// Settings of the base renderer.
+#[derive(Clone, Copy, Debug)]
+pub struct RendererOptions {
+    /// Shadow-map resolution per face for directional and spot lights (texels).
+    pub shadow_resolution: u32,
+    /// Shadow-map resolution per cube face for point lights (texels).
+    pub cube_shadow_resolution: u32,
+}
+
+impl Default for RendererOptions {
+    fn default() -> Self {
+        Self {
+            shadow_resolution: 2048,
+            cube_shadow_resolution: 1024,
+        }
+    }
+}
+
+struct LightShadow {
+    view: LightView,
+    gbuffer: GBuffer,
+    direct_bind: wgpu::BindGroup,
+}
+
+/// Constant values for the `FILL_COUNT` override of frame.wgsl.
+pub fn fill_constants(counting: bool) -> [(&'static str, f64); 1] {
+    [("FILL_COUNT", if counting { 1.0 } else { 0.0 })]
+}
+
+/// A camera-resolution pipeline built twice: without fill counting for timed frames
+/// and with it for count frames (same shader, `FILL_COUNT` override).
+pub struct CountedPipeline<P> {
+    timed: P,
+    counting: P,
+}
+
+impl<P> CountedPipeline<P> {
+    /// Builds both variants; `build` receives the pipeline constants to use.
+    pub fn new(mut build: impl FnMut(&[(&str, f64)]) -> P) -> Self {
+        let timed = build(&fill_constants(false));
+        let counting = build(&fill_constants(true));
+        Self { timed, counting }
+    }
+
+    /// The variant for this frame.
+    pub fn get(&self, frame: &Frame<'_>) -> &P {
+        if frame.counting() {
+            &self.counting
+        } else {
+            &self.timed
+        }
+    }
+}
+
+/// Base renderer and shared per-scene GPU state.
+pub struct Renderer {
+    device: wgpu::Device,
+    scene: GpuScene,
+    gbuffer_pass: GBufferPass,
+    camera_gbuffer: GBuffer,
+    lights: Vec<LightShadow>,
+    direct_pipeline: wgpu::RenderPipeline,
+    targets: RadianceTargets,
+    frame_uniforms: FrameUniforms,
+    _frame_buffer: wgpu::Buffer,
+    frame_layout: wgpu::BindGroupLayout,
+    frame_bind: wgpu::BindGroup,
+    fill_counts: wgpu::Buffer,
+    bytes: u64,
+}
+
+fn layout_entry(
+    binding: u32,
+    visibility: wgpu::ShaderStages,
+    ty: wgpu::BindingType,
+) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility,
+        ty,
+        count: None,
+    }
+}
+
+fn texture_entry(binding: u32, sample_type: wgpu::TextureSampleType) -> wgpu::BindGroupLayoutEntry {
+    layout_entry(
+        binding,
+        wgpu::ShaderStages::VERTEX_FRAGMENT | wgpu::ShaderStages::COMPUTE,
+        wgpu::BindingType::Texture {
+            sample_type,
+            view_dimension: wgpu::TextureViewDimension::D2,
+            multisampled: false,
+        },
+    )
+}
+
+fn storage_entry(
+    binding: u32,
+    read_only: bool,
+    visibility: wgpu::ShaderStages,
+) -> wgpu::BindGroupLayoutEntry {
+    layout_entry(
+        binding,
+        visibility,
+        wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+    )
+}
+
+impl Renderer {
+    /// Allocates every shared target and pipeline for `scene`.
+    pub fn new(
+        ctx: &GpuContext,
+        scene: GpuScene,
+        options: RendererOptions,
+    ) -> Result<Self, GpuError> {
+        ctx.checked("base renderer setup", || Self::build(ctx, scene, options))
+    }
+
+    fn build(ctx: &GpuContext, scene: GpuScene, options: RendererOptions) -> Self {
+        let device = &ctx.device;
+        let sc = &scene.scene;
+        let cam = &sc.camera;
+        let (w, h) = (cam.width, cam.height);
+        let bounds = sc.bounds();
+        let mut far = 0.0f32;
+        for i in 0..8 {
+            let c = Vec3::new(
+                if i & 1 == 0 {
+                    bounds.min.x
+                } else {
+                    bounds.max.x
+                },
+                if i & 2 == 0 {
+                    bounds.min.y
+                } else {
+                    bounds.max.y
+                },
+                if i & 4 == 0 {
+                    bounds.min.z
+                } else {
+                    bounds.max.z
+                },
+            );
+            far = far.max((c - cam.eye).length());
+        }
+        let far = far * 1.05 + 1e-2;
+        let near = (far * 1e-4).max(1e-3);
+
+        let gbuffer_pass = GBufferPass::new(device);
+        let camera_gbuffer = gbuffer_pass.camera_gbuffer(device, cam, near, far);
+        let targets = RadianceTargets::new(device, w, h);
+
+        // Group 0 of method passes.
+        let all = wgpu::ShaderStages::VERTEX_FRAGMENT | wgpu::ShaderStages::COMPUTE;
+        let frame_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("frame (group 0)"),
+            entries: &[
+                layout_entry(
+                    0,
+                    all,
+                    wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
+                ),
+                texture_entry(1, wgpu::TextureSampleType::Float { filterable: false }),
+                texture_entry(2, wgpu::TextureSampleType::Float { filterable: false }),
+                texture_entry(3, wgpu::TextureSampleType::Uint),
+                storage_entry(4, true, all),
+                storage_entry(5, true, all),
+                storage_entry(6, true, all),
+                storage_entry(7, true, all),
+                // Vertex stages may not write storage without VERTEX_WRITABLE_STORAGE.
+                storage_entry(
+                    8,
+                    false,
+                    wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE,
+                ),
+            ],
+        });
+        let frame_uniforms = FrameUniforms {
+            view_proj: (cam.projection(near, far) * cam.view()).to_cols_array_2d(),
+            eye: cam.eye.extend(cam.fov_y_deg.to_radians()).to_array(),
+            forward: cam.forward().extend(0.0).to_array(),
+            resolution: [w as f32, h as f32, 1.0 / w as f32, 1.0 / h as f32],
+            counts: [
+                sc.objects.len() as u32,
+                sc.materials.len() as u32,
+                sc.lights.len() as u32,
+                (scene.waves_buffer.size() / 16) as u32,
+            ],
+        };
+        let frame_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("frame uniforms"),
+            contents: bytemuck::bytes_of(&frame_uniforms),
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let fill_counts = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("fill counts"),
+            size: (w as u64 * h as u64 * 4).max(4),
+            usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_SRC
+                | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let frame_bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("frame (group 0)"),
+            layout: &frame_layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: frame_buffer.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::TextureView(&camera_gbuffer.position.view),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: wgpu::BindingResource::TextureView(&camera_gbuffer.normal.view),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 3,
+                    resource: wgpu::BindingResource::TextureView(&camera_gbuffer.ids.view),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 4,
+                    resource: scene.objects_buffer.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 5,
+                    resource: scene.materials_buffer.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 6,
+                    resource: scene.lights_buffer.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 7,
+                    resource: scene.waves_buffer.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 8,
+                    resource: fill_counts.as_entire_binding(),
+                },
+            ],
+        });
+
+        // Direct lighting: one draw per light, shadowed by that light's G-buffer depth.
+        let frag = wgpu::ShaderStages::FRAGMENT;
+        let direct_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("direct"),
+            entries: &[
+                texture_entry(0, wgpu::TextureSampleType::Float { filterable: false }),
+                texture_entry(1, wgpu::TextureSampleType::Float { filterable: false }),
+                texture_entry(2, wgpu::TextureSampleType::Uint),
+                storage_entry(3, true, frag),
+                layout_entry(
+                    4,
+                    frag,
+                    wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
+                ),
+                layout_entry(
+                    5,
+                    frag,
+                    wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Depth,
+                        view_dimension: wgpu::TextureViewDimension::D2Array,
+                        multisampled: false,
+                    },
+                ),
+                layout_entry(
+                    6,
+                    frag,
+                    wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Comparison),
+                ),
+            ],
+        });
+        let shadow_sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("shadow"),
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            compare: Some(wgpu::CompareFunction::LessEqual),
+            ..Default::default()
+        });
+        let lights = sc
+            .lights
+            .iter()
+            .map(|light| {
+                let cube = matches!(light, caustics_scene::Light::Point { .. });
+                let res = if cube {
+                    options.cube_shadow_resolution
+                } else {
+                    options.shadow_resolution
+                };
+                let view = LightView::fit(light, &bounds, res);
+                let gbuffer = gbuffer_pass.light_gbuffer(device, &view);
+                let mut faces = [[[0.0f32; 4]; 4]; 6];
+                for (i, f) in view.faces.iter().enumerate() {
+                    faces[i] = f.view_proj.to_cols_array_2d();
+                }
+                let uniform = DirectUniform {
+                    light: gpu_light(light),
+                    face_view_proj: faces,
+                    params: [
+                        view.faces.len() as f32,
+                        view.resolution as f32,
+                        view.texel_size,
+                        if view.projection == LightProjection::Orthographic {
+                            1.0
+                        } else {
+                            0.0
+                        },
+                    ],
+                };
+                let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("direct light"),
+                    contents: bytemuck::bytes_of(&uniform),
+                    usage: wgpu::BufferUsages::UNIFORM,
+                });
+                let shadow_view = gbuffer.depth.array_view();
+                let direct_bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("direct"),
+                    layout: &direct_layout,
+                    entries: &[
+                        wgpu::BindGroupEntry {
+                            binding: 0,
+                            resource: wgpu::BindingResource::TextureView(
+                                &camera_gbuffer.position.view,
+                            ),
+                        },
+                        wgpu::BindGroupEntry {
+                            binding: 1,
+                            resource: wgpu::BindingResource::TextureView(
+                                &camera_gbuffer.normal.view,
+                            ),
+                        },
+                        wgpu::BindGroupEntry {
+                            binding: 2,
+                            resource: wgpu::BindingResource::TextureView(&camera_gbuffer.ids.view),
+                        },
+                        wgpu::BindGroupEntry {
+                            binding: 3,
+                            resource: scene.materials_buffer.as_entire_binding(),
+                        },
+                        wgpu::BindGroupEntry {
+                            binding: 4,
+                            resource: buffer.as_entire_binding(),
+                        },
+                        wgpu::BindGroupEntry {
+                            binding: 5,
+                            resource: wgpu::BindingResource::TextureView(&shadow_view),
+                        },
+                        wgpu::BindGroupEntry {
+                            binding: 6,
+                            resource: wgpu::BindingResource::Sampler(&shadow_sampler),
+                        },
+                    ],
+                });
+                LightShadow {
+                    view,
+                    gbuffer,
+                    direct_bind,
+                }
+            })
+            .collect::<Vec<_>>();
+        let direct_module =
+            shader::module(device, "direct.wgsl", shader::compose(shader::DIRECT_WGSL));
+        let direct_pipeline_layout =
+            device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("direct"),
+                bind_group_layouts: &[Some(&direct_layout)],
+                immediate_size: 0,
+            });
+        let additive = wgpu::BlendComponent {
+            src_factor: wgpu::BlendFactor::One,
+            dst_factor: wgpu::BlendFactor::One,
+            operation: wgpu::BlendOperation::Add,
+        };
+        let direct_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("direct"),
+            layout: Some(&direct_pipeline_layout),
+            vertex: wgpu::VertexState {
+                module: &direct_module,
+                entry_point: Some("vs_fullscreen"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            primitive: Default::default(),
+            depth_stencil: None,
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &direct_module,
+                entry_point: Some("fs_main"),
+                compilation_options: Default::default(),
+                targets: &[Some(wgpu::ColorTargetState {
+                    format: HDR_FORMAT,
+                    blend: Some(wgpu::BlendState {
+                        color: additive,
+                        alpha: additive,
+                    }),
+                    write_mask: wgpu::ColorWrites::ALL,
+                })],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        let bytes = scene.bytes
+            + camera_gbuffer.bytes()
+            + targets.bytes()
+            + fill_counts.size()
+            + lights.iter().map(|l| l.gbuffer.bytes()).sum::<u64>();
+        Self {
+            device: device.clone(),
+            scene,
+            gbuffer_pass,
+            camera_gbuffer,
+            lights,
+            direct_pipeline,
+            targets,
+            frame_uniforms,
+            _frame_buffer: frame_buffer,
+            frame_layout,
+            frame_bind,
+            fill_counts,
+            bytes,
+        }
+    }
+
+    pub(crate) fn ctx_device(&self) -> &wgpu::Device {
+        &self.device
+    }
+
+    /// The uploaded scene.
+    pub fn scene(&self) -> &GpuScene {
+        &self.scene
+    }
+
+    /// The camera G-buffer.
+    pub fn camera_gbuffer(&self) -> &GBuffer {
+        &self.camera_gbuffer
+    }
+
+    /// The view and G-buffer of light `i` (the base renderer's, fitted to the whole scene).
+    pub fn light(&self, i: usize) -> Option<(&LightView, &GBuffer)> {
+        self.lights.get(i).map(|l| (&l.view, &l.gbuffer))
+    }
+
+    /// The HDR targets.
+    pub fn targets(&self) -> &RadianceTargets {
+        &self.targets
+    }
+
+    /// Camera, resolution and counts as uploaded.
+    pub fn frame_uniforms(&self) -> &FrameUniforms {
+        &self.frame_uniforms
+    }
+
+    /// Layout of group 0 (frame.wgsl), for method pipeline layouts.
+    pub fn frame_layout(&self) -> &wgpu::BindGroupLayout {
+        &self.frame_layout
+    }
+
+    /// The group-0 bind group.
+    pub fn frame_bind_group(&self) -> &wgpu::BindGroup {
+        &self.frame_bind
+    }
+
+    /// The G-buffer pass, for methods that rasterize their own light views.
+    pub fn gbuffer_pass(&self) -> &GBufferPass {
+        &self.gbuffer_pass
+    }
+
+    /// Bytes of GPU memory owned by the base renderer (scene, G-buffers, targets).
+    pub fn bytes(&self) -> u64 {
+        self.bytes
+    }
+
+    /// Starts a frame: clears the targets (and the fill counter in count frames),
+    /// then records the base passes: camera G-buffer, light G-buffers, direct light.
+    pub fn begin_frame<'a>(
+        &'a self,
+        profiler: &'a mut PassProfiler,
+        mode: FrameMode,
+    ) -> Result<Frame<'a>, GpuError> {
+        let mut frame = Frame::new(self, profiler, mode)?;
+        if mode == FrameMode::Count {
+            frame.encoder.clear_buffer(&self.fill_counts, 0, None);
+        }
+        let clear = |t: &'a crate::textures::Target| {
+            Some(wgpu::RenderPassColorAttachment {
+                view: &t.view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                    store: wgpu::StoreOp::Store,
+                },
+            })
+        };
+        {
+            let attachments = [
+                clear(&self.targets.direct),
+                clear(&self.targets.surface),
+                clear(&self.targets.volume),
+            ];
+            let _pass = frame.render_pass("base/clear_targets", pass_desc(&attachments))?;
+        }
+        self.gbuffer_pass.record(
+            &mut frame,
+            "base/camera_gbuffer",
+            &self.scene,
+            &self.camera_gbuffer,
+        )?;
+        for light in &self.lights {
+            self.gbuffer_pass.record(
+                &mut frame,
+                "base/light_gbuffer",
+                &self.scene,
+                &light.gbuffer,
+            )?;
+        }
+        for light in &self.lights {
+            let attachments = [Some(wgpu::RenderPassColorAttachment {
+                view: &self.targets.direct.view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Load,
+                    store: wgpu::StoreOp::Store,
+                },
+            })];
+            let mut pass = frame.render_pass("base/direct", pass_desc(&attachments))?;
+            pass.set_pipeline(&self.direct_pipeline);
+            pass.set_bind_group(0, &light.direct_bind, &[]);
+            pass.draw(0..3, 0..1);
+        }
+        Ok(frame)
+    }
+
+    /// Reads the per-pixel fragment counts of the last count frame (row 0 top).
+    pub fn read_fill_counts(&self, ctx: &GpuContext) -> Result<Vec<u32>, GpuError> {
+        crate::readback::read_buffer_u32(
+            ctx,
+            &self.fill_counts,
+            self.fill_counts.size(),
+            "fill counts",
+        )
+    }
+}
+
+/// A render-pass descriptor with colour attachments only.
+pub fn pass_desc<'a>(
+    attachments: &'a [Option<wgpu::RenderPassColorAttachment<'a>>],
+) -> wgpu::RenderPassDescriptor<'a> {
+    wgpu::RenderPassDescriptor {
+        label: None,
+        color_attachments: attachments,
+        depth_stencil_attachment: None,
+        timestamp_writes: None,
+        occlusion_query_set: None,
+        multiview_mask: None,
+    }
+}

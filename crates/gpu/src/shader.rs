@@ -1,0 +1,76 @@
+//! Shared WGSL and shader-module creation. Passes compose `common.wgsl` (and
+//! `frame.wgsl` for method passes that read the camera G-buffer) with their own file.
+
+use std::borrow::Cow;
+
+/// Constants, scene tables and radiometry/intersection helpers.
+pub const COMMON_WGSL: &str = include_str!("shaders/common.wgsl");
+/// Group 0 of every method pass: frame uniforms, camera G-buffer, scene tables, fill counter.
+pub const FRAME_WGSL: &str = include_str!("shaders/frame.wgsl");
+/// The G-buffer pass.
+pub const GBUFFER_WGSL: &str = include_str!("shaders/gbuffer.wgsl");
+/// The direct-lighting pass.
+pub const DIRECT_WGSL: &str = include_str!("shaders/direct.wgsl");
+/// The tone-mapped composite pass is done on the CPU (metrics crate); no shader.
+
+/// `common.wgsl` followed by `own`, for passes with their own bindings.
+pub fn compose(own: &str) -> String {
+    format!("{COMMON_WGSL}\n{own}")
+}
+
+/// `common.wgsl`, `frame.wgsl`, then `own`: for method passes bound to group 0.
+pub fn compose_method(own: &str) -> String {
+    format!("{COMMON_WGSL}\n{FRAME_WGSL}\n{own}")
+}
+
+/// Creates a shader module from composed WGSL.
+pub fn module(device: &wgpu::Device, label: &str, source: String) -> wgpu::ShaderModule {
+    device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some(label),
+        source: wgpu::ShaderSource::Wgsl(Cow::Owned(source)),
+    })
+}
+
+/// Parses and validates composed WGSL with naga (the compiler wgpu uses), so a broken
+/// shader fails `cargo test` before any GPU run. Every crate's shader test calls this.
+pub fn validate_wgsl(label: &str, source: &str) -> Result<(), String> {
+    let module = naga::front::wgsl::parse_str(source)
+        .map_err(|e| format!("{label}: WGSL parse error:\n{}", e.emit_to_string(source)))?;
+    naga::valid::Validator::new(
+        naga::valid::ValidationFlags::all(),
+        naga::valid::Capabilities::all(),
+    )
+    .validate(&module)
+    .map_err(|e| {
+        format!(
+            "{label}: WGSL validation error:\n{}",
+            e.emit_to_string(source)
+        )
+    })?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shared_shaders_validate() -> Result<(), String> {
+        validate_wgsl("common.wgsl", COMMON_WGSL)?;
+        validate_wgsl("common+frame.wgsl", &compose_method(""))?;
+        validate_wgsl("gbuffer.wgsl", &compose(GBUFFER_WGSL))?;
+        validate_wgsl("direct.wgsl", &compose(DIRECT_WGSL))
+    }
+
+    #[test]
+    fn validator_rejects_a_broken_shader() {
+        assert!(validate_wgsl("broken", "fn f() -> f32 { return vec2<f32>(1.0); }").is_err());
+        assert!(
+            validate_wgsl(
+                "undeclared",
+                &compose("fn f() -> f32 { return undeclared_thing; }")
+            )
+            .is_err()
+        );
+    }
+}

@@ -1,0 +1,65 @@
+// Group 0 of every method pass: the frame's camera, the camera G-buffer, the scene
+// tables and the fill-rate counter (crates/gpu/src/frame.rs builds the layout).
+
+struct FrameUniforms {
+    view_proj: mat4x4<f32>,
+    // xyz: camera position (m); w: vertical field of view (rad).
+    eye: vec4<f32>,
+    // xyz: unit forward axis of the camera.
+    forward: vec4<f32>,
+    // width, height, 1/width, 1/height (pixels).
+    resolution: vec4<f32>,
+    // object count, material count, light count, wave count.
+    counts: vec4<u32>,
+}
+
+@group(0) @binding(0) var<uniform> frame: FrameUniforms;
+// xyz: world position of the first surface seen through the pixel; w: 1 hit, 0 none.
+@group(0) @binding(1) var gbuf_position: texture_2d<f32>;
+// xyz: smooth world normal (as stored, not flipped); w: +1 front face seen, -1 back face.
+@group(0) @binding(2) var gbuf_normal: texture_2d<f32>;
+// x: object index, y: material index (NONE where nothing is hit).
+@group(0) @binding(3) var gbuf_ids: texture_2d<u32>;
+@group(0) @binding(4) var<storage, read> objects: array<GpuObject>;
+@group(0) @binding(5) var<storage, read> materials: array<GpuMaterial>;
+@group(0) @binding(6) var<storage, read> lights: array<GpuLight>;
+@group(0) @binding(7) var<storage, read> waves: array<GpuWave>;
+@group(0) @binding(8) var<storage, read_write> fill_counts: array<atomic<u32>>;
+
+// Fill-rate mode: the harness builds every camera-resolution fragment pipeline twice,
+// with FILL_COUNT false (timed frames) and true (count frames, DESIGN "Measuring
+// honestly"). Call first thing in the fragment shader, before any discard, so the
+// count matches the fragment-shader invocations that pipeline statistics report.
+override FILL_COUNT: bool = false;
+
+fn count_fragment(frag_coord: vec4<f32>) {
+    if FILL_COUNT {
+        let p = vec2<u32>(frag_coord.xy);
+        atomicAdd(&fill_counts[p.y * u32(frame.resolution.x) + p.x], 1u);
+    }
+}
+
+// Camera G-buffer at a pixel.
+struct GSample {
+    hit: bool,
+    position: vec3<f32>,
+    normal: vec3<f32>,
+    // Unit normal flipped to the side the camera sees.
+    facing_normal: vec3<f32>,
+    object: u32,
+    material: u32,
+}
+
+fn gbuffer_sample(pixel: vec2<u32>) -> GSample {
+    var s: GSample;
+    let p = textureLoad(gbuf_position, pixel, 0);
+    let n = textureLoad(gbuf_normal, pixel, 0);
+    let ids = textureLoad(gbuf_ids, pixel, 0);
+    s.hit = p.w > 0.5;
+    s.position = p.xyz;
+    s.normal = normalize(n.xyz);
+    s.facing_normal = s.normal * select(-1.0, 1.0, n.w >= 0.0);
+    s.object = ids.x;
+    s.material = ids.y;
+    return s;
+}

@@ -1,0 +1,144 @@
+//! Render targets shared by the base passes and the methods.
+
+/// Format of every HDR radiance target (direct, surface caustic, volume caustic).
+/// 32-bit float with additive blending (`FLOAT32_BLENDABLE`), linear W·m⁻²·sr⁻¹.
+pub const HDR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+/// G-buffer world position (xyz) and hit flag (w).
+pub const POSITION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+/// G-buffer normal (xyz) and the side seen (w = ±1).
+pub const NORMAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+/// G-buffer object and material ids.
+pub const IDS_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Uint;
+/// Depth of the camera and light G-buffers (the light's is the shadow map).
+pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+
+/// A texture with its default view and byte size.
+pub struct Target {
+    /// The texture.
+    pub texture: wgpu::Texture,
+    /// A view of all layers (D2 for one layer, D2Array for several).
+    pub view: wgpu::TextureView,
+    /// Per-layer D2 views (for rendering into one layer).
+    pub layer_views: Vec<wgpu::TextureView>,
+    /// Bytes of GPU memory.
+    pub bytes: u64,
+}
+
+impl Target {
+    /// Creates a 2D (array) texture usable as attachment, binding and copy source.
+    pub fn new(
+        device: &wgpu::Device,
+        label: &str,
+        format: wgpu::TextureFormat,
+        width: u32,
+        height: u32,
+        layers: u32,
+        extra_usage: wgpu::TextureUsages,
+    ) -> Self {
+        let texture = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some(label),
+            size: wgpu::Extent3d {
+                width,
+                height,
+                depth_or_array_layers: layers,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                | wgpu::TextureUsages::TEXTURE_BINDING
+                | wgpu::TextureUsages::COPY_SRC
+                | extra_usage,
+            view_formats: &[],
+        });
+        let dimension = if layers > 1 {
+            wgpu::TextureViewDimension::D2Array
+        } else {
+            wgpu::TextureViewDimension::D2
+        };
+        let view = texture.create_view(&wgpu::TextureViewDescriptor {
+            label: Some(label),
+            dimension: Some(dimension),
+            ..Default::default()
+        });
+        let layer_views = (0..layers)
+            .map(|l| {
+                texture.create_view(&wgpu::TextureViewDescriptor {
+                    label: Some(label),
+                    dimension: Some(wgpu::TextureViewDimension::D2),
+                    base_array_layer: l,
+                    array_layer_count: Some(1),
+                    ..Default::default()
+                })
+            })
+            .collect();
+        let bpp = format.block_copy_size(None).unwrap_or(4) as u64;
+        let bytes = width as u64 * height as u64 * layers as u64 * bpp;
+        Self {
+            texture,
+            view,
+            layer_views,
+            bytes,
+        }
+    }
+
+    /// View of the texture as a D2 array (for shadow-map sampling), whatever its layer count.
+    pub fn array_view(&self) -> wgpu::TextureView {
+        self.texture.create_view(&wgpu::TextureViewDescriptor {
+            dimension: Some(wgpu::TextureViewDimension::D2Array),
+            ..Default::default()
+        })
+    }
+}
+
+/// The three HDR images of a frame (DESIGN "Units and what an image means").
+pub struct RadianceTargets {
+    /// L D E with shadows, written by the base renderer.
+    pub direct: Target,
+    /// L S+ D E, written by the method.
+    pub surface: Target,
+    /// L S+ M E, written by the method (stays zero for surface-only methods).
+    pub volume: Target,
+}
+
+impl RadianceTargets {
+    /// Allocates the three targets at the camera resolution.
+    pub fn new(device: &wgpu::Device, width: u32, height: u32) -> Self {
+        let storage = wgpu::TextureUsages::STORAGE_BINDING;
+        Self {
+            direct: Target::new(
+                device,
+                "direct radiance",
+                HDR_FORMAT,
+                width,
+                height,
+                1,
+                storage,
+            ),
+            surface: Target::new(
+                device,
+                "surface caustic radiance",
+                HDR_FORMAT,
+                width,
+                height,
+                1,
+                storage,
+            ),
+            volume: Target::new(
+                device,
+                "volume caustic radiance",
+                HDR_FORMAT,
+                width,
+                height,
+                1,
+                storage,
+            ),
+        }
+    }
+
+    /// Bytes of GPU memory the targets own.
+    pub fn bytes(&self) -> u64 {
+        self.direct.bytes + self.surface.bytes + self.volume.bytes
+    }
+}
