@@ -111,7 +111,7 @@ fn bad_parameters_and_flags_fail_before_any_work() {
         (vec!["--param", "gird=64"], "known parameters"),
         (vec!["--param", "grid"], "key=value"),
         (vec!["--frames", "0"], "--frames"),
-        (vec!["--exposure", "-1"], "--exposure"),
+        (vec!["--exposure=-1"], "--exposure"),
         (vec!["--reference", "missing.exr"], "missing.exr"),
     ] {
         let mut all = vec![

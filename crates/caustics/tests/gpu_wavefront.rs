@@ -120,10 +120,30 @@ fn water_pool_run_writes_a_finite_nonempty_caustic_with_consistent_counts() {
         assert!(names.contains(&want), "pass {want} missing from {names:?}");
     }
 
-    // Fill-rate heatmap vs pipeline statistics for the splat pass (the method's only
-    // camera-resolution pass). Fragment-shader invocations may include helper
-    // invocations (2x2 quads on triangle edges) that never write the counter, so
-    // statistics >= heatmap; the margin measured on lavapipe is stated below.
+    // The water mesh's triangles are a few pixels wide here, so most invocations are
+    // helpers: only the loose bound holds (see `splat_statistics_vs_heatmap`).
+    let (stats, fill) = splat_statistics_vs_heatmap(&result);
+    assert!(
+        stats <= MAX_INVOCATIONS_PER_FRAGMENT * fill,
+        "statistics {stats} > {MAX_INVOCATIONS_PER_FRAGMENT} x heatmap {fill}"
+    );
+}
+
+/// Helper invocations: the rasterizer runs fragment shaders on whole 2x2 quads
+/// (hardware) or 4x4 blocks (llvmpipe), and pipeline statistics may count the helper
+/// lanes, which never write the fill counter. So heatmap <= statistics <= 16 x heatmap
+/// always, and with triangles much larger than a block the two agree closely.
+const MAX_INVOCATIONS_PER_FRAGMENT: f64 = 16.0;
+
+/// Largest share of splat-pass invocations the heatmap misses when the triangles are
+/// large (flat-water scene: a 9² grid over 12 m seen from 0.9 m, triangles of tens of thousands of
+/// pixels at 320x240). Measured on lavapipe (Mesa 22.3.6, llvmpipe 4x4 blocks): 0.0845
+/// (83888 invocations for 76800 fragments); 2x2-quad hardware sees less.
+const LARGE_TRIANGLE_HELPER_MARGIN: f64 = 0.10;
+
+/// (pipeline-statistics fragment invocations of `wavefront/splat`, heatmap sum),
+/// with heatmap <= statistics checked.
+fn splat_statistics_vs_heatmap(result: &RunResult) -> (f64, f64) {
     let frags = result
         .fragments
         .as_ref()
@@ -135,19 +155,13 @@ fn water_pool_run_writes_a_finite_nonempty_caustic_with_consistent_counts() {
         .expect("splat pass statistics");
     let stats = splat.fragment_shader_invocations as f64;
     let fill = frags.fill_total as f64;
-    assert!(fill > 0.0);
-    assert!(stats >= fill, "statistics {stats} < heatmap {fill}");
-    let margin = (stats - fill) / stats;
+    assert!(fill > 0.0, "empty heatmap");
     assert!(
-        margin <= HELPER_INVOCATION_MARGIN,
-        "statistics {stats} vs heatmap {fill}: margin {margin:.4}"
+        stats >= fill,
+        "statistics {stats} < heatmap {fill}: the counter saw fragments the GPU did not shade"
     );
+    (stats, fill)
 }
-
-/// Largest accepted share of fragment-shader invocations that the fill counter does
-/// not see (helper invocations). Measured on lavapipe (Mesa 22.3): see the closing
-/// note of the foundation issue and `flat_water` below.
-const HELPER_INVOCATION_MARGIN: f64 = 0.0;
 
 /// Exact unpolarized Fresnel transmittance from air into a dielectric, computed here
 /// independently of the shaders.
@@ -169,20 +183,28 @@ fn flat_water_gives_the_analytic_floor_radiance_within_one_percent() {
     let scene = serde_json::json!({
         "name": "flat_water",
         "description": "flat water over a floor: the analytic check of wavefront",
-        "camera": {"eye": [0, 0.9, 0], "target": [0, 0, 0], "up": [0, 0, -1], "fov_y_deg": 60, "width": 160, "height": 120},
+        "camera": {"eye": [0, 0.9, 0], "target": [0, 0, 0], "up": [0, 0, -1], "fov_y_deg": 60, "width": 320, "height": 240},
         "lights": [{"type": "directional", "direction": dir_vec, "irradiance": irradiance}],
         "materials": {"water": {"type": "dielectric", "ior": ior}, "floor": {"type": "diffuse", "albedo": albedo}},
         "objects": [
             {"shape": {"type": "quad", "center": [0, 0, 0], "normal": [0, 1, 0], "size": [6, 6]}, "material": "floor"},
-            {"shape": {"type": "heightfield", "center": [0, 1, 0], "size": [12, 12], "resolution": [33, 33],
+            {"shape": {"type": "heightfield", "center": [0, 1, 0], "size": [12, 12], "resolution": [9, 9],
                        "waves": [{"amplitude": 0.0, "wavelength": 1.0, "direction": [1, 0], "phase": 0}]},
              "material": "water"}
         ]
     });
     let path = tmp.path().join("flat_water.json");
     std::fs::write(&path, serde_json::to_string_pretty(&scene).expect("json")).expect("write");
-    let (dir, _) = run_done(&options(&path, tmp.path()));
+    let (dir, result) = run_done(&options(&path, tmp.path()));
     let surface = read_exr(&dir.join("surface.exr")).expect("surface.exr");
+
+    let (stats, fill) = splat_statistics_vs_heatmap(&result);
+    let margin = (stats - fill) / stats;
+    eprintln!("flat water: splat statistics {stats}, heatmap {fill}, helper margin {margin:.4}");
+    assert!(
+        margin <= LARGE_TRIANGLE_HELPER_MARGIN,
+        "statistics {stats} vs heatmap {fill}: margin {margin:.4}"
+    );
 
     let t = fresnel_transmittance(cos_theta, ior);
     let expected: Vec<f64> = (0..3)
