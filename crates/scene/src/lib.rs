@@ -50,7 +50,7 @@ mod validate;
 
 use std::path::{Path, PathBuf};
 
-pub use glam::{Mat4, Vec2, Vec3};
+pub use glam::{Mat3, Mat4, Vec2, Vec3, Vec4};
 
 pub use camera::Camera;
 pub use error::SceneError;

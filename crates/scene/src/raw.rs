@@ -290,6 +290,13 @@ impl Source<'_> {
                 message: "the file is empty; expected a scene object".into(),
             });
         }
+        if !self.text.trim_start().starts_with('{') {
+            return Err(SceneError::Invalid {
+                file: self.file.to_path_buf(),
+                json_path: "(root)".into(),
+                message: "expected a JSON object (the scene) at the top level".into(),
+            });
+        }
         self.parse_fragment(self.text, "")
     }
 
