@@ -133,8 +133,9 @@ impl Heightfield {
         Vec3::new(-g.x, 1.0, -g.y).normalize()
     }
 
-    /// Grid vertex (i, j), i along x in 0..resolution[0], j along z in 0..resolution[1]:
-    /// x = center.x − size.x/2 + size.x · i/(resolution[0] − 1), likewise z; y = height.
+    /// Grid vertex (i, j), i along x in `0..resolution[0]`, j along z in
+    /// `0..resolution[1]`: x = center.x − size.x/2 + size.x · i/(`resolution[0]` − 1),
+    /// likewise z; y = [`Heightfield::height`].
     pub fn vertex(&self, i: u32, j: u32) -> Vec3 {
         let (x, z) = self.grid_xz(i, j);
         Vec3::new(x, self.height(x, z), z)
