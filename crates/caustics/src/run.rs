@@ -99,10 +99,8 @@ fn validate_options(o: &RunOptions) -> Result<()> {
     if !(o.exposure.is_finite() && o.exposure > 0.0) {
         bail!("--exposure: expected a positive number, got {}", o.exposure);
     }
-    if let Some(r) = &o.reference {
-        if !r.is_file() {
-            bail!("--reference {}: no such file", r.display());
-        }
+    if let Some(r) = o.reference.as_ref().filter(|r| !r.is_file()) {
+        bail!("--reference {}: no such file", r.display());
     }
     Ok(())
 }

@@ -11,8 +11,6 @@ pub const FRAME_WGSL: &str = include_str!("shaders/frame.wgsl");
 pub const GBUFFER_WGSL: &str = include_str!("shaders/gbuffer.wgsl");
 /// The direct-lighting pass.
 pub const DIRECT_WGSL: &str = include_str!("shaders/direct.wgsl");
-/// The tone-mapped composite pass is done on the CPU (metrics crate); no shader.
-
 /// `common.wgsl` followed by `own`, for passes with their own bindings.
 pub fn compose(own: &str) -> String {
     format!("{COMMON_WGSL}\n{own}")

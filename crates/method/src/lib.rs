@@ -158,6 +158,10 @@ pub struct ParamSpec {
     pub doc: &'static str,
 }
 
+/// Builds a method instance for the renderer's scene from JSON parameters.
+pub type CreateFn =
+    fn(&GpuContext, &Renderer, &serde_json::Value) -> Result<Box<dyn CausticsMethod>, MethodError>;
+
 /// Everything the harness's registry knows of a method.
 pub struct MethodInfo {
     /// Registry name (`--method`).
@@ -176,11 +180,7 @@ pub struct MethodInfo {
     /// Scene checks beyond the generic ones, given the (valid) parameters.
     pub check_scene: fn(&Scene, &serde_json::Value) -> Result<(), Unsupported>,
     /// Builds an instance for a scene, from parameters given as a JSON object.
-    pub create: fn(
-        &GpuContext,
-        &Renderer,
-        &serde_json::Value,
-    ) -> Result<Box<dyn CausticsMethod>, MethodError>,
+    pub create: CreateFn,
 }
 
 impl MethodInfo {
@@ -265,7 +265,7 @@ mod tests {
     #[test]
     fn unknown_param_names_the_known_ones() {
         let e = parse_params::<P>("m", &serde_json::json!({"gird": 3}))
-            .unwrap_err()
+            .expect_err("unknown key")
             .to_string();
         assert!(
             e.contains("\"gird\" is unknown") && e.contains("grid, scale"),
@@ -277,7 +277,7 @@ mod tests {
     fn wrong_type_is_an_error_and_defaults_fill_in() {
         assert!(parse_params::<P>("m", &serde_json::json!({"grid": "x"})).is_err());
         assert!(parse_params::<P>("m", &serde_json::json!({"grid": -1})).is_err());
-        let p = parse_params::<P>("m", &serde_json::json!({"grid": 7})).unwrap();
+        let p = parse_params::<P>("m", &serde_json::json!({"grid": 7})).expect("valid");
         assert_eq!(
             p,
             P {

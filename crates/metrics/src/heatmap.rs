@@ -207,7 +207,10 @@ pub fn format_count(v: f64) -> String {
             format!("{x:.0}")
         }
     };
-    if v < 10_000.0 {
+    if v < 10.0 && v.fract() != 0.0 {
+        // Mid-scale labels of small maxima (e.g. 0.5 for a maximum of 1 fragment/px).
+        format!("{v:.1}")
+    } else if v < 10_000.0 {
         format!("{}", v.round())
     } else if v < 999_500.0 {
         format!("{}k", sig3(v / 1e3))
@@ -329,6 +332,8 @@ mod tests {
     fn label_formats() {
         assert_eq!(format_count(0.0), "0");
         assert_eq!(format_count(9999.0), "9999");
+        assert_eq!(format_count(0.5), "0.5");
+        assert_eq!(format_count(2.0), "2");
         assert_eq!(format_count(12_345.0), "12.3k");
         assert_eq!(format_count(123_456.0), "123k");
         assert_eq!(format_count(1_234_567.0), "1.23M");
