@@ -285,3 +285,61 @@ fn timestamps_are_nonzero_and_increase_through_a_frame() {
     let second_begin = frames[1].passes[0].ticks.map(|t| t.0).expect("ticks");
     assert!(second_begin > first_end);
 }
+
+#[test]
+fn errors_against_a_reference_are_zero_for_itself_and_tell_scale_from_shape() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let scene = small_scene(tmp.path(), "water_pool", 128, 96);
+    let (dir, first) = run_done(&options(&scene, &tmp.path().join("a")));
+    assert!(first.errors.is_none(), "no reference, no errors");
+    let surface = read_exr(&dir.join("surface.exr")).expect("surface.exr");
+
+    // The same image as its own reference: every comparator says "identical".
+    let same = tmp.path().join("same.exr");
+    caustics_metrics::write_exr(&same, &surface).expect("write reference");
+    let mut o = options(&scene, &tmp.path().join("b"));
+    o.reference = Some(same);
+    let (dir_b, r) = run_done(&o);
+    let e = r.errors.expect("errors with a reference").surface;
+    assert_eq!(e.rmse, 0.0, "runs are deterministic on one adapter");
+    assert_eq!(e.flip, 0.0);
+    assert!((e.ssim - 1.0).abs() < 1e-9, "{}", e.ssim);
+    assert!(dir_b.join("error.png").is_file());
+
+    // Twice as bright a reference: a pure normalization error, which the best
+    // scale explains fully.
+    let double = tmp.path().join("double.exr");
+    caustics_metrics::write_exr(&double, &surface.scaled(2.0)).expect("write reference");
+    o.reference = Some(double);
+    o.out = tmp.path().join("c");
+    let e = run_done(&o).1.errors.expect("errors").surface;
+    assert!(e.rmse > 0.0 && e.flip > 0.0);
+    assert!(
+        (e.best_scale - 2.0).abs() < 1e-4,
+        "best scale {}",
+        e.best_scale
+    );
+    assert!(
+        e.rmse_after_best_scale < 1e-4 * e.rmse,
+        "{} vs {}",
+        e.rmse_after_best_scale,
+        e.rmse
+    );
+}
+
+#[test]
+fn a_reference_of_the_wrong_size_is_refused_before_any_write() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let scene = small_scene(tmp.path(), "water_pool", 64, 48);
+    let reference = tmp.path().join("small.exr");
+    caustics_metrics::write_exr(&reference, &HdrImage::new(32, 24)).expect("write");
+    let out = tmp.path().join("out");
+    let mut o = options(&scene, &out);
+    o.reference = Some(reference);
+    let e = run(&o).expect_err("size mismatch").to_string();
+    assert!(
+        e.contains("expected a 64x48 image") && e.contains("got 32x24"),
+        "{e}"
+    );
+    assert!(!out.exists(), "nothing may be written");
+}

@@ -1,7 +1,9 @@
 // Pass 2 of wavefront: keep the triangles whose three vertices are valid and land on
 // the same side of the same receiver (a triangle spanning two receivers has no
-// single area to take a ratio of), compacting their indices and counting vertices
-// into the indirect draw arguments. Dropped triangles are counted by reason.
+// single area to take a ratio of), as one flag per triangle. Dropped triangles are
+// counted by reason. Flags rather than a compacted list: the splat pass then draws
+// in triangle order, so additive blending sums in the same order every frame and
+// the image is bit-for-bit deterministic (an atomic compaction order is not).
 
 struct Traced {
     old_pos: vec4<f32>,
@@ -17,23 +19,18 @@ struct TraceParams {
     triangle_count: u32,
 }
 
-struct DrawCounters {
-    // DrawIndirectArgs: vertex_count, instance_count, first_vertex, first_instance.
-    vertex_count: atomic<u32>,
-    instance_count: u32,
-    first_vertex: u32,
-    first_instance: u32,
+struct Counters {
+    kept: atomic<u32>,
     dropped_invalid_vertex: atomic<u32>,
     dropped_receiver_mismatch: atomic<u32>,
-    pad0: u32,
-    pad1: u32,
+    pad: u32,
 }
 
 @group(1) @binding(0) var<uniform> tp: TraceParams;
 @group(1) @binding(1) var<storage, read> traced: array<Traced>;
 @group(1) @binding(2) var<storage, read> triangles: array<u32>;
-@group(1) @binding(3) var<storage, read_write> kept: array<u32>;
-@group(1) @binding(4) var<storage, read_write> counters: DrawCounters;
+@group(1) @binding(3) var<storage, read_write> keep: array<u32>;
+@group(1) @binding(4) var<storage, read_write> counters: Counters;
 
 @compute @workgroup_size(64)
 fn classify_triangles(@builtin(global_invocation_id) gid: vec3<u32>) {
@@ -44,6 +41,7 @@ fn classify_triangles(@builtin(global_invocation_id) gid: vec3<u32>) {
     let a = traced[triangles[3u * tri]];
     let b = traced[triangles[3u * tri + 1u]];
     let c = traced[triangles[3u * tri + 2u]];
+    keep[tri] = 0u;
     if a.info.x == NONE || b.info.x == NONE || c.info.x == NONE {
         atomicAdd(&counters.dropped_invalid_vertex, 1u);
         return;
@@ -52,6 +50,6 @@ fn classify_triangles(@builtin(global_invocation_id) gid: vec3<u32>) {
         atomicAdd(&counters.dropped_receiver_mismatch, 1u);
         return;
     }
-    let slot = atomicAdd(&counters.vertex_count, 3u) / 3u;
-    kept[slot] = tri;
+    keep[tri] = 1u;
+    atomicAdd(&counters.kept, 1u);
 }

@@ -2,9 +2,10 @@
 //!
 //! The light is a wavefront mesh: each vertex is a light ray, each triangle the bundle
 //! of rays between its vertices. The rays are traced through the refractor to the
-//! receivers (`trace.wgsl`), triangles that stay on one receiver are kept
-//! (`classify.wgsl`), and the refracted mesh is drawn from the camera with brightness
-//! = flux density × (area before)/(area after), the two areas taken from screen-space
+//! receivers (`trace.wgsl`), triangles that stay on one receiver are flagged
+//! (`classify.wgsl`; flags, not a compacted list, so that the draw order and with it
+//! the additive blend are the same every frame: the image is deterministic), and the
+//! refracted mesh is drawn from the camera with brightness = flux density × (area before)/(area after), the two areas taken from screen-space
 //! derivatives of the old and new positions (`splat.wgsl`). Flux density is the
 //! light's irradiance per unit area of the plane perpendicular to a directional
 //! light (or its intensity per steradian for a point/spot light) times the Fresnel
@@ -209,8 +210,8 @@ struct SplatParams {
     _pad: [f32; 3],
 }
 
-/// Indirect draw arguments followed by drop counters (matches `DrawCounters`).
-const COUNTERS_INIT: [u32; 8] = [0, 1, 0, 0, 0, 0, 0, 0];
+/// Kept and dropped triangle counts (matches `Counters` in classify.wgsl).
+const COUNTERS_INIT: [u32; 4] = [0; 4];
 
 /// `wavefront` bound to one scene.
 pub struct Wavefront {
@@ -373,19 +374,16 @@ impl Wavefront {
             usage: storage_usage,
             mapped_at_creation: false,
         });
-        let kept = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("wavefront kept triangles"),
+        let keep = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("wavefront keep flags"),
             size: triangle_count.max(1) as u64 * 4,
             usage: storage_usage,
             mapped_at_creation: false,
         });
         let counters = init(
-            "wavefront draw counters",
+            "wavefront counters",
             bytemuck::cast_slice(&COUNTERS_INIT),
-            storage_usage
-                | wgpu::BufferUsages::INDIRECT
-                | wgpu::BufferUsages::COPY_DST
-                | wgpu::BufferUsages::COPY_SRC,
+            storage_usage | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
         );
         let counters_init = init(
             "wavefront counters reset",
@@ -428,13 +426,13 @@ impl Wavefront {
             device,
             "wavefront classify",
             &classify_layout,
-            &[&trace_params, &traced, &triangles, &kept, &counters],
+            &[&trace_params, &traced, &triangles, &keep, &counters],
         );
         let splat_bind = bind(
             device,
             "wavefront splat",
             &splat_layout,
-            &[&splat_params, &traced, &triangles, &kept],
+            &[&splat_params, &traced, &triangles, &keep],
         );
 
         let pipeline_layout = |label: &str, own: &wgpu::BindGroupLayout| {
@@ -522,7 +520,7 @@ impl Wavefront {
             &sources,
             &triangles,
             &traced,
-            &kept,
+            &keep,
             &counters,
             &counters_init,
         ]
@@ -583,7 +581,7 @@ impl CausticsMethod for Wavefront {
         pass.set_pipeline(pipeline);
         pass.set_bind_group(0, renderer.frame_bind_group(), &[]);
         pass.set_bind_group(1, &self.splat_bind, &[]);
-        pass.draw_indirect(&self.counters, 0);
+        pass.draw(0..3 * self.triangle_count, 0..1);
         Ok(())
     }
 
@@ -597,9 +595,9 @@ impl CausticsMethod for Wavefront {
         let mut out = Counters::new();
         out.insert("source_vertices".into(), self.source_count as u64);
         out.insert("triangles".into(), self.triangle_count as u64);
-        out.insert("kept_triangles".into(), c[0] as u64 / 3);
-        out.insert("dropped_invalid_vertex".into(), c[4] as u64);
-        out.insert("dropped_receiver_mismatch".into(), c[5] as u64);
+        out.insert("kept_triangles".into(), c[0] as u64);
+        out.insert("dropped_invalid_vertex".into(), c[1] as u64);
+        out.insert("dropped_receiver_mismatch".into(), c[2] as u64);
         Ok(out)
     }
 

@@ -24,7 +24,7 @@ struct SplatParams {
 @group(1) @binding(0) var<uniform> sp: SplatParams;
 @group(1) @binding(1) var<storage, read> traced: array<Traced>;
 @group(1) @binding(2) var<storage, read> triangles: array<u32>;
-@group(1) @binding(3) var<storage, read> kept: array<u32>;
+@group(1) @binding(3) var<storage, read> keep: array<u32>;
 
 struct VsOut {
     @builtin(position) clip: vec4<f32>,
@@ -37,9 +37,14 @@ struct VsOut {
 
 @vertex
 fn vs_splat(@builtin(vertex_index) vi: u32) -> VsOut {
-    let tri = kept[vi / 3u];
-    let v = traced[triangles[3u * tri + vi % 3u]];
+    let tri = vi / 3u;
     var o: VsOut;
+    if keep[tri] == 0u {
+        // Dropped: all three vertices at one point outside the clip volume.
+        o.clip = vec4<f32>(2.0, 2.0, 2.0, 1.0);
+        return o;
+    }
+    let v = traced[triangles[3u * tri + vi % 3u]];
     o.clip = frame.view_proj * vec4<f32>(v.new_pos.xyz, 1.0);
     o.old_pos = v.old_pos.xyz;
     o.new_pos = v.new_pos.xyz;
