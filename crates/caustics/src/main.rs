@@ -1,6 +1,5 @@
 //! `caustics`: render caustic scenes with real-time methods, measure and score them.
 
-use std::path::PathBuf;
 use std::process::ExitCode;
 
 use anyhow::Result;
@@ -24,36 +23,7 @@ enum Command {
     /// List the built-in scenes and the methods with their parameters and defaults.
     List,
     /// Render a scene with a method; write images, timings, fragment counts and errors.
-    Run {
-        /// Built-in scene name (see `caustics list`) or path to a scene JSON file.
-        #[arg(long)]
-        scene: String,
-        /// Method name (see `caustics list`).
-        #[arg(long)]
-        method: String,
-        /// Method parameter, `key=value` (repeatable).
-        #[arg(long = "param", value_name = "KEY=VALUE")]
-        params: Vec<String>,
-        /// Measured frames (timings are medians over these).
-        #[arg(long, default_value_t = 20)]
-        frames: u32,
-        /// Warm-up frames before measuring.
-        #[arg(long, default_value_t = 3)]
-        warmup: u32,
-        /// Reference surface caustic image (EXR) to score against.
-        #[arg(long, value_name = "FILE.exr")]
-        reference: Option<PathBuf>,
-        /// Output root; results go under DIR/<scene>/<method>/.
-        #[arg(long, value_name = "DIR", default_value = "results/runs")]
-        out: PathBuf,
-        /// Substring of the adapter name to use (default: CAUSTICS_ADAPTER, else the
-        /// first hardware adapter, else lavapipe).
-        #[arg(long)]
-        adapter: Option<String>,
-        /// Exposure scale of the tone-mapped PNGs and of FLIP: linear × scale, clamp, sRGB.
-        #[arg(long, default_value_t = 2.0)]
-        exposure: f32,
-    },
+    Run(RunOptions),
 }
 
 fn list() {
@@ -84,42 +54,19 @@ fn main() -> ExitCode {
             list();
             Ok(ExitCode::SUCCESS)
         }
-        Command::Run {
-            scene,
-            method,
-            params,
-            frames,
-            warmup,
-            reference,
-            out,
-            adapter,
-            exposure,
-        } => {
-            let opts = RunOptions {
-                scene,
-                method,
-                params,
-                frames,
-                warmup,
-                reference,
-                out,
-                adapter,
-                exposure,
-            };
-            run::run(&opts).map(|o| match o {
-                RunOutcome::Done { dir, result } => {
-                    print_summary(&dir, &result);
-                    ExitCode::SUCCESS
-                }
-                RunOutcome::Skipped { reason } => {
-                    eprintln!(
-                        "skipped: method {} cannot render scene {}: {reason}",
-                        opts.method, opts.scene
-                    );
-                    ExitCode::from(EXIT_SKIPPED as u8)
-                }
-            })
-        }
+        Command::Run(opts) => run::run(&opts).map(|o| match o {
+            RunOutcome::Done { dir, result } => {
+                print_summary(&dir, &result);
+                ExitCode::SUCCESS
+            }
+            RunOutcome::Skipped { reason } => {
+                eprintln!(
+                    "skipped: method {} cannot render scene {}: {reason}",
+                    opts.method, opts.scene
+                );
+                ExitCode::from(EXIT_SKIPPED as u8)
+            }
+        }),
     };
     match outcome {
         Ok(code) => code,

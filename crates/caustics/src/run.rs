@@ -22,26 +22,36 @@ use crate::{machine, registry};
 /// Exit code of a run skipped because the method cannot render the scene.
 pub const EXIT_SKIPPED: i32 = 3;
 
-/// Everything `caustics run` takes.
-#[derive(Clone, Debug)]
+/// Everything `caustics run` takes (also its command-line flags).
+#[derive(Clone, Debug, clap::Args)]
 pub struct RunOptions {
-    /// Built-in scene name or path to a scene JSON.
+    /// Built-in scene name (see `caustics list`) or path to a scene JSON file.
+    #[arg(long)]
     pub scene: String,
-    /// Method name.
+    /// Method name (see `caustics list`).
+    #[arg(long)]
     pub method: String,
-    /// `key=value` pairs.
+    /// Method parameter, `key=value` (repeatable).
+    #[arg(long = "param", value_name = "KEY=VALUE")]
     pub params: Vec<String>,
-    /// Measured (timed) frames.
+    /// Measured frames (timings are medians over these).
+    #[arg(long, default_value_t = 20)]
     pub frames: u32,
-    /// Warm-up frames.
+    /// Warm-up frames before measuring.
+    #[arg(long, default_value_t = 3)]
     pub warmup: u32,
-    /// Reference surface caustic image.
+    /// Reference surface caustic image (EXR) to score against.
+    #[arg(long, value_name = "FILE.exr")]
     pub reference: Option<PathBuf>,
-    /// Output root; results go under `<out>/<scene>/<method>/`.
+    /// Output root; results go under DIR/<scene>/<method>/.
+    #[arg(long, value_name = "DIR", default_value = "results/runs")]
     pub out: PathBuf,
-    /// Adapter substring (else `CAUSTICS_ADAPTER`, else the default choice).
+    /// Substring of the adapter name to use (default: CAUSTICS_ADAPTER, else the
+    /// first hardware adapter, else lavapipe).
+    #[arg(long)]
     pub adapter: Option<String>,
-    /// Tone-mapping exposure scale for PNGs and FLIP.
+    /// Exposure scale of the tone-mapped PNGs and of FLIP: linear × scale, clamp, sRGB.
+    #[arg(long, default_value_t = 2.0)]
     pub exposure: f32,
 }
 

@@ -11,7 +11,7 @@ use crate::gbuffer::{GBuffer, GBufferPass, LightProjection, LightView};
 use crate::profiling::{FrameMode, PassProfiler};
 use crate::scene_upload::{GpuLight, GpuScene, gpu_light};
 use crate::shader;
-use crate::textures::{HDR_FORMAT, RadianceTargets};
+use crate::textures::{RadianceTargets, additive_hdr_target, load_attachment};
 use crate::{GpuContext, GpuError};
 
 /// Matches `FrameUniforms` in frame.wgsl.
@@ -422,11 +422,6 @@ impl Renderer {
                 bind_group_layouts: &[Some(&direct_layout)],
                 immediate_size: 0,
             });
-        let additive = wgpu::BlendComponent {
-            src_factor: wgpu::BlendFactor::One,
-            dst_factor: wgpu::BlendFactor::One,
-            operation: wgpu::BlendOperation::Add,
-        };
         let direct_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some("direct"),
             layout: Some(&direct_pipeline_layout),
@@ -443,14 +438,7 @@ impl Renderer {
                 module: &direct_module,
                 entry_point: Some("fs_main"),
                 compilation_options: Default::default(),
-                targets: &[Some(wgpu::ColorTargetState {
-                    format: HDR_FORMAT,
-                    blend: Some(wgpu::BlendState {
-                        color: additive,
-                        alpha: additive,
-                    }),
-                    write_mask: wgpu::ColorWrites::ALL,
-                })],
+                targets: &[Some(additive_hdr_target())],
             }),
             multiview_mask: None,
             cache: None,
@@ -571,15 +559,7 @@ impl Renderer {
             )?;
         }
         for light in &self.lights {
-            let attachments = [Some(wgpu::RenderPassColorAttachment {
-                view: &self.targets.direct.view,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Load,
-                    store: wgpu::StoreOp::Store,
-                },
-            })];
+            let attachments = [load_attachment(&self.targets.direct.view)];
             let mut pass = frame.render_pass("base/direct", pass_desc(&attachments))?;
             pass.set_pipeline(&self.direct_pipeline);
             pass.set_bind_group(0, &light.direct_bind, &[]);

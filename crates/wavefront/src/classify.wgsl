@@ -5,20 +5,6 @@
 // in triangle order, so additive blending sums in the same order every frame and
 // the image is bit-for-bit deterministic (an atomic compaction order is not).
 
-struct Traced {
-    old_pos: vec4<f32>,
-    new_pos: vec4<f32>,
-    flux: vec4<f32>,
-    info: vec4<u32>,
-}
-
-struct TraceParams {
-    specular_object: u32,
-    light_index: u32,
-    source_count: u32,
-    triangle_count: u32,
-}
-
 struct Counters {
     kept: atomic<u32>,
     dropped_invalid_vertex: atomic<u32>,

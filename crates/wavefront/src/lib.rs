@@ -22,6 +22,7 @@
 mod sources;
 
 use bytemuck::{Pod, Zeroable};
+use caustics_gpu::textures::{additive_hdr_target, load_attachment};
 use caustics_gpu::wgpu::{self, util::DeviceExt};
 use caustics_gpu::{CountedPipeline, Frame, GpuContext, Renderer, pass_desc, shader};
 use caustics_method::{
@@ -33,9 +34,16 @@ use serde::{Deserialize, Serialize};
 
 pub use sources::{Source, WavefrontMesh};
 
+/// Types shared by the three passes (`Traced`, `TraceParams`).
+const TYPES_WGSL: &str = include_str!("types.wgsl");
 const TRACE_WGSL: &str = include_str!("trace.wgsl");
 const CLASSIFY_WGSL: &str = include_str!("classify.wgsl");
 const SPLAT_WGSL: &str = include_str!("splat.wgsl");
+
+/// A pass's full WGSL: shared GPU files, wavefront's types, then the pass.
+fn pass_source(pass: &str) -> String {
+    shader::compose_method(&format!("{TYPES_WGSL}\n{pass}"))
+}
 
 /// Registry name.
 pub const NAME: &str = "wavefront";
@@ -443,7 +451,7 @@ impl Wavefront {
             })
         };
         let compute = |label: &str, src: &str, entry: &str, own: &wgpu::BindGroupLayout| {
-            let module = shader::module(device, label, shader::compose_method(src));
+            let module = shader::module(device, label, pass_source(src));
             device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                 label: Some(label),
                 layout: Some(&pipeline_layout(label, own)),
@@ -466,17 +474,8 @@ impl Wavefront {
             &classify_layout,
         );
 
-        let splat_module = shader::module(
-            device,
-            "wavefront splat.wgsl",
-            shader::compose_method(SPLAT_WGSL),
-        );
+        let splat_module = shader::module(device, "wavefront splat.wgsl", pass_source(SPLAT_WGSL));
         let splat_layout_p = pipeline_layout("wavefront splat", &splat_layout);
-        let additive = wgpu::BlendComponent {
-            src_factor: wgpu::BlendFactor::One,
-            dst_factor: wgpu::BlendFactor::One,
-            operation: wgpu::BlendOperation::Add,
-        };
         let splat_pipeline = CountedPipeline::new(|constants| {
             device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some("wavefront splat"),
@@ -501,14 +500,7 @@ impl Wavefront {
                         constants,
                         ..Default::default()
                     },
-                    targets: &[Some(wgpu::ColorTargetState {
-                        format: caustics_gpu::textures::HDR_FORMAT,
-                        blend: Some(wgpu::BlendState {
-                            color: additive,
-                            alpha: additive,
-                        }),
-                        write_mask: wgpu::ColorWrites::ALL,
-                    })],
+                    targets: &[Some(additive_hdr_target())],
                 }),
                 multiview_mask: None,
                 cache: None,
@@ -568,15 +560,7 @@ impl CausticsMethod for Wavefront {
             pass.dispatch_workgroups(self.triangle_count.div_ceil(64), 1, 1);
         }
         let pipeline = self.splat_pipeline.get(frame);
-        let attachments = [Some(wgpu::RenderPassColorAttachment {
-            view: &renderer.targets().surface.view,
-            depth_slice: None,
-            resolve_target: None,
-            ops: wgpu::Operations {
-                load: wgpu::LoadOp::Load,
-                store: wgpu::StoreOp::Store,
-            },
-        })];
+        let attachments = [load_attachment(&renderer.targets().surface.view)];
         let mut pass = frame.render_pass("wavefront/splat", pass_desc(&attachments))?;
         pass.set_pipeline(pipeline);
         pass.set_bind_group(0, renderer.frame_bind_group(), &[]);
@@ -612,9 +596,9 @@ mod tests {
 
     #[test]
     fn shaders_validate() -> Result<(), String> {
-        shader::validate_wgsl("trace.wgsl", &shader::compose_method(TRACE_WGSL))?;
-        shader::validate_wgsl("classify.wgsl", &shader::compose_method(CLASSIFY_WGSL))?;
-        shader::validate_wgsl("splat.wgsl", &shader::compose_method(SPLAT_WGSL))
+        shader::validate_wgsl("trace.wgsl", &pass_source(TRACE_WGSL))?;
+        shader::validate_wgsl("classify.wgsl", &pass_source(CLASSIFY_WGSL))?;
+        shader::validate_wgsl("splat.wgsl", &pass_source(SPLAT_WGSL))
     }
 
     #[test]

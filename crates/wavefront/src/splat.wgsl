@@ -6,13 +6,6 @@
 // exact for the affine map over a triangle and needs no geometry shader. Overlapping
 // sheets (folds of the wavefront) add up through additive blending.
 
-struct Traced {
-    old_pos: vec4<f32>,
-    new_pos: vec4<f32>,
-    flux: vec4<f32>,
-    info: vec4<u32>,
-}
-
 struct SplatParams {
     // Accept a fragment when |G-buffer position - receiver point| <= tolerance × distance to the eye.
     tolerance: f32,
