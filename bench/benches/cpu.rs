@@ -59,7 +59,9 @@ fn metrics(c: &mut Criterion) {
     c.bench_function("metrics/error_map_1024x768", |b| {
         b.iter(|| error_map(black_box(&test), &reference).expect("ok"))
     });
-    let counts: Vec<u32> = (0..1024 * 768u32).map(|i| i.wrapping_mul(7919) % 13).collect();
+    let counts: Vec<u32> = (0..1024 * 768u32)
+        .map(|i| i.wrapping_mul(7919) % 13)
+        .collect();
     c.bench_function("metrics/heatmap_1024x768", |b| {
         b.iter(|| heatmap(black_box(&counts), 1024, 768, "fragments/px").expect("ok"))
     });
