@@ -164,14 +164,19 @@ pub struct ToneMapInfo {
     pub exposure_scale: f32,
 }
 
-/// Errors of the surface caustic image against a reference.
+/// Errors of the caustic images against a reference.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ErrorReport {
-    /// The reference image.
+    /// The reference surface caustic image.
     pub reference: String,
+    /// Where it came from: "--reference" or "cache".
+    pub reference_source: String,
     /// Errors of the surface caustic image.
     pub surface: caustics_metrics::Errors,
+    /// Errors of the volume caustic image, when the method renders volume caustics
+    /// and the reference has a volume image.
+    pub volume: Option<caustics_metrics::Errors>,
     /// RMS of the reference's own per-pixel standard error (from `stderr.exr` beside
     /// it), the noise floor below which RMSE differences mean nothing.
     pub reference_noise_rms: Option<f64>,

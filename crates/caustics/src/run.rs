@@ -53,6 +53,10 @@ pub struct RunOptions {
     /// Exposure scale of the tone-mapped PNGs and of FLIP: linear × scale, clamp, sRGB.
     #[arg(long, default_value_t = 2.0)]
     pub exposure: f32,
+    /// Reference cache root; without --reference, a cached reference of this scene
+    /// (same content hash and resolution) is used for errors.
+    #[arg(long, value_name = "DIR", default_value = crate::references::DEFAULT_ROOT)]
+    pub references: PathBuf,
 }
 
 /// How a run ended.
@@ -127,25 +131,7 @@ pub fn run(o: &RunOptions) -> Result<RunOutcome> {
     if let Err(reason) = info.supports(&scene, &params) {
         return Ok(RunOutcome::Skipped { reason: reason.0 });
     }
-    let reference = match &o.reference {
-        Some(p) => {
-            let img = caustics_metrics::read_exr(p)
-                .with_context(|| format!("reading reference {}", p.display()))?;
-            let (w, h) = (scene.camera.width, scene.camera.height);
-            if (img.width, img.height) != (w, h) {
-                bail!(
-                    "--reference {}: expected a {w}x{h} image (the scene's camera), got {}x{}",
-                    p.display(),
-                    img.width,
-                    img.height
-                );
-            }
-            img.check_finite(&p.display().to_string())?;
-            Some((p.clone(), img))
-        }
-        None => None,
-    };
-
+    let reference = load_reference(o, &scene, info.capabilities.volume)?;
     let ctx = GpuContext::new(&AdapterChoice::from_flag_or_env(o.adapter.as_deref()))?;
     eprintln!(
         "adapter: {} ({}, {}, driver {} {})",
@@ -226,17 +212,23 @@ pub fn run(o: &RunOptions) -> Result<RunOutcome> {
         images.insert("fill_heatmap".into(), "fill_heatmap.png".into());
     }
     let errors = match &reference {
-        Some((path, img)) => {
-            let surface_errors = caustics_metrics::all_errors(&surface, img, &tone)?;
+        Some(r) => {
+            let surface_errors = caustics_metrics::all_errors(&surface, &r.surface, &tone)?;
             caustics_metrics::write_png(
                 &dir.join("error.png"),
-                &caustics_metrics::error_map(&surface, img)?,
+                &caustics_metrics::error_map(&surface, &r.surface)?,
             )?;
             images.insert("error".into(), "error.png".into());
+            let volume_errors = match &r.volume {
+                Some(v) => Some(caustics_metrics::all_errors(&volume, v, &tone)?),
+                None => None,
+            };
             Some(ErrorReport {
-                reference: path.display().to_string(),
+                reference: r.path.display().to_string(),
+                reference_source: r.source.to_owned(),
                 surface: surface_errors,
-                reference_noise_rms: reference_noise(path)?,
+                volume: volume_errors,
+                reference_noise_rms: reference_noise(&r.path)?,
             })
         }
         None => None,
@@ -281,6 +273,63 @@ pub fn run(o: &RunOptions) -> Result<RunOutcome> {
         dir,
         result: Box::new(result),
     })
+}
+
+/// The reference images a run scores against.
+struct LoadedReference {
+    path: PathBuf,
+    source: &'static str,
+    surface: HdrImage,
+    volume: Option<HdrImage>,
+}
+
+fn read_reference_image(p: &Path, scene: &Scene) -> Result<HdrImage> {
+    let img = caustics_metrics::read_exr(p)
+        .with_context(|| format!("reading reference {}", p.display()))?;
+    let (w, h) = (scene.camera.width, scene.camera.height);
+    if (img.width, img.height) != (w, h) {
+        bail!(
+            "--reference {}: expected a {w}x{h} image (the scene's camera), got {}x{}",
+            p.display(),
+            img.width,
+            img.height
+        );
+    }
+    img.check_finite(&p.display().to_string())?;
+    Ok(img)
+}
+
+/// `--reference`, else the cached reference of the scene (said on stderr), else none.
+fn load_reference(o: &RunOptions, scene: &Scene, volume: bool) -> Result<Option<LoadedReference>> {
+    if let Some(p) = &o.reference {
+        let surface = read_reference_image(p, scene)?;
+        return Ok(Some(LoadedReference {
+            path: p.clone(),
+            source: "--reference",
+            surface,
+            volume: None,
+        }));
+    }
+    let Some(cached) = crate::references::find(&o.references, scene)? else {
+        return Ok(None);
+    };
+    eprintln!(
+        "using cached reference {} ({} photons, mean relative standard error {:.2}%)",
+        cached.dir.display(),
+        cached.meta.photons,
+        100.0 * cached.meta.relative_stderr
+    );
+    let surface = read_reference_image(&cached.caustic(), scene)?;
+    let volume = match cached.volume().filter(|_| volume) {
+        Some(p) => Some(read_reference_image(&p, scene)?),
+        None => None,
+    };
+    Ok(Some(LoadedReference {
+        path: cached.caustic(),
+        source: "cache",
+        surface,
+        volume,
+    }))
 }
 
 /// RMS of `stderr.exr` beside the reference, if present.

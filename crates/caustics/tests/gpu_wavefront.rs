@@ -36,6 +36,7 @@ fn options(scene: &Path, out: &Path) -> RunOptions {
         out: out.to_owned(),
         adapter: None,
         exposure: 2.0,
+        references: out.join("no-reference-cache"),
     }
 }
 
@@ -342,4 +343,66 @@ fn a_reference_of_the_wrong_size_is_refused_before_any_write() {
         "{e}"
     );
     assert!(!out.exists(), "nothing may be written");
+}
+
+#[test]
+fn a_cached_reference_is_found_by_scene_hash_and_used() {
+    use caustics::references::{ReferenceMeta, cache_dir, find};
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let path = small_scene(tmp.path(), "water_pool", 64, 48);
+    let scene = caustics_scene::Scene::load(&path).expect("scene");
+    let root = tmp.path().join("refs");
+    assert!(find(&root, &scene).expect("empty cache").is_none());
+
+    // A reference of all-ones radiance with a known standard error.
+    let dir = cache_dir(&root, &scene);
+    std::fs::create_dir_all(&dir).expect("mkdir");
+    let mut ones = HdrImage::new(64, 48);
+    ones.pixels.iter_mut().for_each(|p| *p = [1.0; 3]);
+    caustics_metrics::write_exr(&dir.join("caustic.exr"), &ones).expect("write");
+    caustics_metrics::write_exr(&dir.join("stderr.exr"), &ones.scaled(0.01)).expect("write");
+    let meta = ReferenceMeta {
+        schema_version: 1,
+        scene: scene.name.clone(),
+        scene_hash: scene.hash_hex(),
+        width: 64,
+        height: 48,
+        photons: 1000,
+        seconds: 1.0,
+        photons_per_second: 1000.0,
+        seed: 1,
+        batches: 16,
+        commit: "test".into(),
+        relative_stderr: 0.01,
+    };
+    std::fs::write(
+        dir.join("meta.json"),
+        serde_json::to_vec(&meta).expect("json"),
+    )
+    .expect("write");
+
+    let mut o = options(&path, &tmp.path().join("out"));
+    o.references = root.clone();
+    let (_, r) = run_done(&o);
+    let e = r.errors.expect("the cached reference is used");
+    assert_eq!(e.reference_source, "cache");
+    assert!(e.reference.ends_with("caustic.exr"), "{}", e.reference);
+    let noise = e
+        .reference_noise_rms
+        .expect("stderr.exr beside the reference");
+    assert!((noise - 0.01).abs() < 1e-6, "{noise}");
+
+    // A meta.json that does not match the scene is an error, not a silent miss.
+    let mut stale = meta.clone();
+    stale.scene_hash = "0000000000000000".into();
+    std::fs::write(
+        dir.join("meta.json"),
+        serde_json::to_vec(&stale).expect("json"),
+    )
+    .expect("write");
+    let err = run(&o).expect_err("stale cache").to_string();
+    assert!(
+        err.contains("meta.json") && err.contains("0000000000000000"),
+        "{err}"
+    );
 }
