@@ -1,0 +1,337 @@
+//! The independent CPU reference of caustics-bench: a light tracer that renders the
+//! DESIGN.md **surface caustic image** (paths L S+ D E), the **volume caustic image**
+//! (L S+ M E, scenes with a medium) and optionally the **direct image** (L D E), each
+//! in radiance (W·m⁻²·sr⁻¹, pixel = average over its area, row 0 at the top), with a
+//! per-pixel standard-error image from independent batches.
+//!
+//! Photons leave the lights aimed at the specular objects ([`emission`](crate) docs
+//! in `emission.rs`), follow dielectrics (exact unpolarized Fresnel, Snell, TIR) and
+//! mirrors, and at their first diffuse hit after ≥ 1 specular event are connected to
+//! the pinhole (the formula and its derivation are in `sensor.rs`). It knows no GPU
+//! and no method, so it stays an independent check.
+//!
+//! ```
+//! use caustics_reference::{Reference, ReferenceOptions};
+//! use caustics_scene::Scene;
+//! use std::path::Path;
+//!
+//! let json = r#"{
+//!   "name": "tiny",
+//!   "camera": {"eye": [0, 3, 5], "target": [0, 0, 0], "up": [0, 1, 0],
+//!              "fov_y_deg": 40, "width": 32, "height": 24},
+//!   "lights": [{"type": "directional", "direction": [0, -1, 0], "irradiance": [1, 1, 1]}],
+//!   "materials": {"glass": {"type": "dielectric", "ior": 1.5},
+//!                 "floor": {"type": "diffuse", "albedo": [0.8, 0.8, 0.8]}},
+//!   "objects": [
+//!     {"shape": {"type": "sphere", "center": [0, 1.5, 0], "radius": 1}, "material": "glass"},
+//!     {"shape": {"type": "quad", "center": [0, 0, 0], "normal": [0, 1, 0], "size": [20, 20]},
+//!      "material": "floor"}
+//!   ]
+//! }"#;
+//! let scene = Scene::from_json_str(json, Path::new("tiny.json"))?;
+//! let reference = Reference::new(&scene)?;
+//! let opts = ReferenceOptions { photons: 10_000, ..Default::default() };
+//! let result = reference.render(&opts, &|_done| {})?;
+//! assert_eq!(result.caustic.pixels.len(), 32 * 24);
+//! assert!(result.photons >= 10_000);
+//! assert!(result.volume.is_none());
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+//!
+//! Dependencies: `rayon` runs the work units in parallel (work stealing, scoped, the
+//! standard choice); `obvhs` is the BVH (see `bvh.rs` for why); `rand_xoshiro` gives
+//! xoshiro256++, a small fast generator with SplitMix64 seeding, so each work unit
+//! gets an independent stream from a hash of (seed, unit).
+
+mod accumulate;
+mod bvh;
+mod emission;
+pub mod eps;
+mod geometry;
+mod optics;
+mod sensor;
+mod tracer;
+
+use std::time::Instant;
+
+use caustics_scene::{Material, Medium, Scene, Vec3};
+use rayon::prelude::*;
+
+use crate::accumulate::{Accumulator, Plan, UNIT_PHOTONS};
+use crate::emission::{Emitter, Target};
+use crate::geometry::Geometry;
+use crate::sensor::Sensor;
+use crate::tracer::{PowerFilter, Tracer};
+
+pub use eps::EPSILON_POLICY;
+
+/// Most batches accepted (each holds a full-resolution `f64` image in memory).
+pub const MAX_BATCHES: u32 = 1024;
+
+/// Errors of the reference renderer.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum ReferenceError {
+    /// `photons` was 0.
+    #[error("photons must be at least 1, got 0")]
+    NoPhotons,
+    /// `batches` was below 2 (no standard error from fewer) or above [`MAX_BATCHES`].
+    #[error("batches must be in 2..={max}, got {batches}", max = MAX_BATCHES)]
+    BadBatches {
+        /// The value given.
+        batches: u32,
+    },
+    /// `render_for` was given a time that is not a finite number ≥ 0.
+    #[error("seconds must be a finite number >= 0, got {seconds}")]
+    BadSeconds {
+        /// The value given.
+        seconds: f64,
+    },
+    /// The scene holds something the reference cannot render.
+    #[error("unsupported scene content: {0}")]
+    Unsupported(String),
+}
+
+/// How much to trace.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ReferenceOptions {
+    /// Photons to trace (rounded up to whole work units: the exact count is in
+    /// [`ReferenceResult::photons`]).
+    pub photons: u64,
+    /// Independent batches behind the standard-error images (default 16, ≥ 2).
+    pub batches: u32,
+    /// Seed of the random streams (default 1).
+    pub seed: u64,
+    /// Also render the direct image (L D E), emitting as many photons again over the
+    /// whole scene.
+    pub direct: bool,
+}
+
+impl Default for ReferenceOptions {
+    fn default() -> Self {
+        ReferenceOptions {
+            photons: 1 << 20,
+            batches: 16,
+            seed: 1,
+            direct: false,
+        }
+    }
+}
+
+/// An RGB radiance image, row 0 at the top.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ReferenceImage {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Row-major pixels, radiance in W·m⁻²·sr⁻¹ per channel.
+    pub pixels: Vec<[f32; 3]>,
+}
+
+impl ReferenceImage {
+    /// The pixel at column `x`, row `y` (row 0 at the top).
+    ///
+    /// # Panics
+    /// If (x, y) is outside the image.
+    pub fn at(&self, x: u32, y: u32) -> [f32; 3] {
+        self.pixels[(y * self.width + x) as usize]
+    }
+}
+
+/// What a render produced.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ReferenceResult {
+    /// The surface caustic image (L S+ D E).
+    pub caustic: ReferenceImage,
+    /// Per-pixel standard error of `caustic`.
+    pub caustic_stderr: ReferenceImage,
+    /// The volume caustic image (L S+ M E): `Some` iff the scene has a medium.
+    pub volume: Option<ReferenceImage>,
+    /// Per-pixel standard error of `volume`.
+    pub volume_stderr: Option<ReferenceImage>,
+    /// The direct image (L D E), if asked for.
+    pub direct: Option<ReferenceImage>,
+    /// Photons traced for the caustic images (as many again for the direct image).
+    pub photons: u64,
+    /// Wall time of the render in seconds.
+    pub seconds: f64,
+}
+
+/// A scene prepared for light tracing: geometry with its BVH, emitters, camera.
+pub struct Reference {
+    geometry: Geometry,
+    materials: Vec<Material>,
+    medium: Option<Medium>,
+    sensor: Sensor,
+    caustic: Emitter,
+    direct: Emitter,
+}
+
+impl Reference {
+    /// Prepares `scene`: intersection structures (a BVH over heightfield and mesh
+    /// triangles) and the emission setup.
+    pub fn new(scene: &Scene) -> Result<Self, ReferenceError> {
+        if scene.camera.width == 0 || scene.camera.height == 0 {
+            return Err(ReferenceError::Unsupported(
+                "a camera image with no pixels".into(),
+            ));
+        }
+        Ok(Reference {
+            geometry: Geometry::new(scene),
+            materials: scene
+                .objects
+                .iter()
+                .map(|o| scene.material(o).clone())
+                .collect(),
+            medium: scene.medium.clone(),
+            sensor: Sensor::new(&scene.camera),
+            caustic: Emitter::new(scene, Target::Specular),
+            direct: Emitter::new(scene, Target::Scene),
+        })
+    }
+
+    /// Traces `opts.photons` photons (rounded up to whole work units; the exact count
+    /// is in the result), calling `progress(photons_done)` from time to time.
+    pub fn render(
+        &self,
+        opts: &ReferenceOptions,
+        progress: &(dyn Fn(u64) + Sync),
+    ) -> Result<ReferenceResult, ReferenceError> {
+        check(opts)?;
+        let plan = Plan::for_photons(opts.photons, opts.batches);
+        Ok(self.run(plan, None, opts, progress, None, true).0)
+    }
+
+    /// Traces until `seconds` have passed (whole rounds: one unit more in every
+    /// batch), returning how many photons were traced; re-rendering with that photon
+    /// count gives the same image bit for bit. At least one round is traced.
+    pub fn render_for(
+        &self,
+        seconds: f64,
+        opts: &ReferenceOptions,
+        progress: &(dyn Fn(u64) + Sync),
+    ) -> Result<ReferenceResult, ReferenceError> {
+        if !(seconds.is_finite() && seconds >= 0.0) {
+            return Err(ReferenceError::BadSeconds { seconds });
+        }
+        check(&ReferenceOptions {
+            photons: 1,
+            ..opts.clone()
+        })?;
+        let plan = Plan {
+            unit: UNIT_PHOTONS,
+            rounds: u64::MAX,
+            batches: opts.batches,
+        };
+        Ok(self.run(plan, Some(seconds), opts, progress, None, true).0)
+    }
+
+    /// Test hook: the mean power (W, RGB) per traced sample of the caustic photons
+    /// landing on diffuse surfaces after ≥ 1 specular event where `filter(object,
+    /// point)` holds, for the same photons as [`Reference::render`] with `opts`. The
+    /// mean over photons is an unbiased estimate of that power.
+    #[doc(hidden)]
+    pub fn caustic_power(
+        &self,
+        opts: &ReferenceOptions,
+        filter: &(dyn Fn(usize, Vec3) -> bool + Sync),
+    ) -> Result<[f64; 3], ReferenceError> {
+        check(opts)?;
+        let plan = Plan::for_photons(opts.photons, opts.batches);
+        let opts = ReferenceOptions {
+            direct: false,
+            ..opts.clone()
+        };
+        Ok(self.run(plan, None, &opts, &|_| {}, Some(filter), false).1)
+    }
+
+    fn run(
+        &self,
+        plan: Plan,
+        seconds: Option<f64>,
+        opts: &ReferenceOptions,
+        progress: &(dyn Fn(u64) + Sync),
+        power_filter: Option<PowerFilter<'_>>,
+        connect: bool,
+    ) -> (ReferenceResult, [f64; 3]) {
+        let start = Instant::now();
+        let tracer = Tracer {
+            geometry: &self.geometry,
+            materials: &self.materials,
+            medium: self.medium.as_ref(),
+            sensor: &self.sensor,
+            caustic: &self.caustic,
+            direct: opts.direct.then_some(&self.direct),
+            power_filter,
+            connect,
+        };
+        let pixels = if connect { self.sensor.pixels() } else { 0 };
+        let mut acc = Accumulator::new(plan.batches, pixels, self.medium.is_some(), opts.direct);
+        let b = plan.batches as u64;
+        // Rounds per group: enough units to keep every thread busy.
+        let group = (2 * rayon::current_num_threads() as u64).div_ceil(b).max(1);
+        let mut rounds = 0u64;
+        while rounds < plan.rounds {
+            let n = group.min(plan.rounds - rounds);
+            let first = rounds * b;
+            let outs: Vec<_> = (first..first + n * b)
+                .into_par_iter()
+                .map(|k| tracer.run_unit(opts.seed, k, plan.unit))
+                .collect();
+            acc.add(first, &outs);
+            rounds += n;
+            progress(rounds * b * plan.unit as u64);
+            if seconds.is_some_and(|s| start.elapsed().as_secs_f64() >= s) {
+                break;
+            }
+        }
+        let done = Plan { rounds, ..plan };
+        let per_batch = rounds * plan.unit as u64;
+        let image = |pixels: Vec<[f32; 3]>| ReferenceImage {
+            width: self.sensor.width,
+            height: self.sensor.height,
+            pixels,
+        };
+        let (caustic, caustic_stderr) = acc.surface.finish(per_batch);
+        let (volume, volume_stderr) = match &acc.volume {
+            Some(v) => {
+                let (m, e) = v.finish(per_batch);
+                (Some(image(m)), Some(image(e)))
+            }
+            None => (None, None),
+        };
+        let n = done.photons() as f64;
+        let direct = acc.direct.as_ref().map(|d| {
+            image(
+                d.chunks_exact(3)
+                    .map(|p| [(p[0] / n) as f32, (p[1] / n) as f32, (p[2] / n) as f32])
+                    .collect(),
+            )
+        });
+        let power = acc.power.map(|p| p / n);
+        (
+            ReferenceResult {
+                caustic: image(caustic),
+                caustic_stderr: image(caustic_stderr),
+                volume,
+                volume_stderr,
+                direct,
+                photons: done.photons(),
+                seconds: start.elapsed().as_secs_f64(),
+            },
+            power,
+        )
+    }
+}
+
+fn check(opts: &ReferenceOptions) -> Result<(), ReferenceError> {
+    if opts.photons == 0 {
+        return Err(ReferenceError::NoPhotons);
+    }
+    if !(2..=MAX_BATCHES).contains(&opts.batches) {
+        return Err(ReferenceError::BadBatches {
+            batches: opts.batches,
+        });
+    }
+    Ok(())
+}
