@@ -113,7 +113,7 @@ fn water_pool_run_writes_a_finite_nonempty_caustic_with_consistent_counts() {
         .collect();
     for want in [
         "base/camera_gbuffer",
-        "base/light_gbuffer",
+        "base/shadow_map",
         "base/direct",
         "wavefront/trace_vertices",
         "wavefront/splat",

@@ -181,9 +181,30 @@ impl GBuffer {
     }
 }
 
-/// The G-buffer rasterization pipeline, shared by camera and light views.
+/// Depth only, from a light's view (one layer per face): the base renderer's shadow
+/// map. Methods that need positions, normals and ids from the light allocate a full
+/// [`GBuffer`] with [`GBufferPass::light_gbuffer`] at their own resolution.
+pub struct ShadowMap {
+    /// Depth, one layer per face.
+    pub depth: Target,
+    /// View uniforms, one per layer.
+    views: Vec<(wgpu::Buffer, wgpu::BindGroup)>,
+    /// Width, height.
+    pub size: (u32, u32),
+}
+
+impl ShadowMap {
+    /// Bytes of GPU memory owned.
+    pub fn bytes(&self) -> u64 {
+        self.depth.bytes
+    }
+}
+
+/// The G-buffer rasterization pipelines (full and depth-only), shared by camera and
+/// light views.
 pub struct GBufferPass {
     pipeline: wgpu::RenderPipeline,
+    depth_pipeline: wgpu::RenderPipeline,
     layout: wgpu::BindGroupLayout,
 }
 
@@ -236,13 +257,7 @@ impl GBufferPass {
                 cull_mode: None,
                 ..Default::default()
             },
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: DEPTH_FORMAT,
-                depth_write_enabled: Some(true),
-                depth_compare: Some(wgpu::CompareFunction::Less),
-                stencil: Default::default(),
-                bias: Default::default(),
-            }),
+            depth_stencil: Some(depth_state()),
             multisample: Default::default(),
             fragment: Some(wgpu::FragmentState {
                 module: &module,
@@ -257,20 +272,39 @@ impl GBufferPass {
             multiview_mask: None,
             cache: None,
         });
-        Self { pipeline, layout }
+        let depth_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("shadow map"),
+            layout: Some(&pipeline_layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_main"),
+                compilation_options: Default::default(),
+                buffers: &[Some(SceneVertex::LAYOUT)],
+            },
+            primitive: wgpu::PrimitiveState {
+                cull_mode: None,
+                ..Default::default()
+            },
+            depth_stencil: Some(depth_state()),
+            multisample: Default::default(),
+            fragment: None,
+            multiview_mask: None,
+            cache: None,
+        });
+        Self {
+            pipeline,
+            depth_pipeline,
+            layout,
+        }
     }
 
-    fn allocate(
+    fn view_binds(
         &self,
         device: &wgpu::Device,
         label: &str,
-        width: u32,
-        height: u32,
         views: &[ViewUniform],
-    ) -> GBuffer {
-        let layers = views.len() as u32;
-        let none = wgpu::TextureUsages::empty();
-        let views = views
+    ) -> Vec<(wgpu::Buffer, wgpu::BindGroup)> {
+        views
             .iter()
             .map(|v| {
                 let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -288,7 +322,62 @@ impl GBufferPass {
                 });
                 (buffer, bind)
             })
-            .collect();
+            .collect()
+    }
+
+    /// Allocates a depth-only view of the light (the shadow map), one layer per face.
+    pub fn shadow_map(&self, device: &wgpu::Device, view: &LightView) -> ShadowMap {
+        let layers = view.faces.len() as u32;
+        let res = view.resolution;
+        ShadowMap {
+            depth: Target::new(
+                device,
+                "shadow map",
+                DEPTH_FORMAT,
+                res,
+                res,
+                layers,
+                wgpu::TextureUsages::empty(),
+            ),
+            views: self.view_binds(device, "shadow map", &light_view_uniforms(view)),
+            size: (res, res),
+        }
+    }
+
+    /// Records the depth of every object into each layer of `shadow`.
+    pub fn record_shadow_map(
+        &self,
+        frame: &mut Frame<'_>,
+        name: &str,
+        scene: &GpuScene,
+        shadow: &ShadowMap,
+    ) -> Result<(), GpuError> {
+        for (layer, (_, bind)) in shadow.views.iter().enumerate() {
+            let desc = wgpu::RenderPassDescriptor {
+                label: None,
+                color_attachments: &[],
+                depth_stencil_attachment: Some(clear_depth(&shadow.depth.layer_views[layer])),
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            };
+            let mut pass = frame.render_pass(name, desc)?;
+            draw_scene(&mut pass, &self.depth_pipeline, bind, scene);
+        }
+        Ok(())
+    }
+
+    fn allocate(
+        &self,
+        device: &wgpu::Device,
+        label: &str,
+        width: u32,
+        height: u32,
+        views: &[ViewUniform],
+    ) -> GBuffer {
+        let layers = views.len() as u32;
+        let none = wgpu::TextureUsages::empty();
+        let views = self.view_binds(device, label, views);
         GBuffer {
             position: Target::new(
                 device,
@@ -349,20 +438,12 @@ impl GBufferPass {
 
     /// Allocates a light G-buffer, one layer per face of `view`.
     pub fn light_gbuffer(&self, device: &wgpu::Device, view: &LightView) -> GBuffer {
-        let us: Vec<ViewUniform> = view
-            .faces
-            .iter()
-            .map(|f| ViewUniform {
-                view_proj: f.view_proj.to_cols_array_2d(),
-                eye: view.origin.extend(1.0).to_array(),
-            })
-            .collect();
         self.allocate(
             device,
             "light gbuffer",
             view.resolution,
             view.resolution,
-            &us,
+            &light_view_uniforms(view),
         )
     }
 
@@ -410,25 +491,58 @@ impl GBufferPass {
             let desc = wgpu::RenderPassDescriptor {
                 label: None,
                 color_attachments: &attachments,
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &gbuffer.depth.layer_views[layer],
-                    depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(1.0),
-                        store: wgpu::StoreOp::Store,
-                    }),
-                    stencil_ops: None,
-                }),
+                depth_stencil_attachment: Some(clear_depth(&gbuffer.depth.layer_views[layer])),
                 timestamp_writes: None,
                 occlusion_query_set: None,
                 multiview_mask: None,
             };
             let mut pass = frame.render_pass(name, desc)?;
-            pass.set_pipeline(&self.pipeline);
-            pass.set_bind_group(0, bind, &[]);
-            pass.set_vertex_buffer(0, scene.vertex_buffer.slice(..));
-            pass.set_index_buffer(scene.index_buffer.slice(..), wgpu::IndexFormat::Uint32);
-            pass.draw_indexed(0..scene.index_count, 0, 0..1);
+            draw_scene(&mut pass, &self.pipeline, bind, scene);
         }
         Ok(())
     }
+}
+
+fn draw_scene(
+    pass: &mut wgpu::RenderPass<'_>,
+    pipeline: &wgpu::RenderPipeline,
+    view: &wgpu::BindGroup,
+    scene: &GpuScene,
+) {
+    pass.set_pipeline(pipeline);
+    pass.set_bind_group(0, view, &[]);
+    pass.set_vertex_buffer(0, scene.vertex_buffer.slice(..));
+    pass.set_index_buffer(scene.index_buffer.slice(..), wgpu::IndexFormat::Uint32);
+    pass.draw_indexed(0..scene.index_count, 0, 0..1);
+}
+
+fn depth_state() -> wgpu::DepthStencilState {
+    wgpu::DepthStencilState {
+        format: DEPTH_FORMAT,
+        depth_write_enabled: Some(true),
+        depth_compare: Some(wgpu::CompareFunction::Less),
+        stencil: Default::default(),
+        bias: Default::default(),
+    }
+}
+
+fn clear_depth(view: &wgpu::TextureView) -> wgpu::RenderPassDepthStencilAttachment<'_> {
+    wgpu::RenderPassDepthStencilAttachment {
+        view,
+        depth_ops: Some(wgpu::Operations {
+            load: wgpu::LoadOp::Clear(1.0),
+            store: wgpu::StoreOp::Store,
+        }),
+        stencil_ops: None,
+    }
+}
+
+fn light_view_uniforms(view: &LightView) -> Vec<ViewUniform> {
+    view.faces
+        .iter()
+        .map(|f| ViewUniform {
+            view_proj: f.view_proj.to_cols_array_2d(),
+            eye: view.origin.extend(1.0).to_array(),
+        })
+        .collect()
 }

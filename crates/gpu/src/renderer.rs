@@ -7,7 +7,7 @@ use caustics_scene::Vec3;
 use wgpu::util::DeviceExt;
 
 use crate::frame::Frame;
-use crate::gbuffer::{GBuffer, GBufferPass, LightProjection, LightView};
+use crate::gbuffer::{GBuffer, GBufferPass, LightProjection, LightView, ShadowMap};
 use crate::profiling::{FrameMode, PassProfiler};
 use crate::scene_upload::{GpuLight, GpuScene, gpu_light};
 use crate::shader;
@@ -59,7 +59,7 @@ impl Default for RendererOptions {
 
 struct LightShadow {
     view: LightView,
-    gbuffer: GBuffer,
+    shadow: ShadowMap,
     direct_bind: wgpu::BindGroup,
 }
 
@@ -344,7 +344,7 @@ impl Renderer {
                     options.shadow_resolution
                 };
                 let view = LightView::fit(light, &bounds, res);
-                let gbuffer = gbuffer_pass.light_gbuffer(device, &view);
+                let shadow = gbuffer_pass.shadow_map(device, &view);
                 let mut faces = [[[0.0f32; 4]; 4]; 6];
                 for (i, f) in view.faces.iter().enumerate() {
                     faces[i] = f.view_proj.to_cols_array_2d();
@@ -368,7 +368,7 @@ impl Renderer {
                     contents: bytemuck::bytes_of(&uniform),
                     usage: wgpu::BufferUsages::UNIFORM,
                 });
-                let shadow_view = gbuffer.depth.array_view();
+                let shadow_view = shadow.depth.array_view();
                 let direct_bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
                     label: Some("direct"),
                     layout: &direct_layout,
@@ -409,7 +409,7 @@ impl Renderer {
                 });
                 LightShadow {
                     view,
-                    gbuffer,
+                    shadow,
                     direct_bind,
                 }
             })
@@ -447,7 +447,7 @@ impl Renderer {
             + camera_gbuffer.bytes()
             + targets.bytes()
             + fill_counts.size()
-            + lights.iter().map(|l| l.gbuffer.bytes()).sum::<u64>();
+            + lights.iter().map(|l| l.shadow.bytes()).sum::<u64>();
         Self {
             device: device.clone(),
             scene,
@@ -479,9 +479,11 @@ impl Renderer {
         &self.camera_gbuffer
     }
 
-    /// The view and G-buffer of light `i` (the base renderer's, fitted to the whole scene).
-    pub fn light(&self, i: usize) -> Option<(&LightView, &GBuffer)> {
-        self.lights.get(i).map(|l| (&l.view, &l.gbuffer))
+    /// The view and shadow map of light `i` (fitted to the whole scene). Methods that
+    /// need a light G-buffer fit their own [`LightView`] and allocate one with
+    /// [`GBufferPass::light_gbuffer`].
+    pub fn light(&self, i: usize) -> Option<(&LightView, &ShadowMap)> {
+        self.lights.get(i).map(|l| (&l.view, &l.shadow))
     }
 
     /// The HDR targets.
@@ -515,7 +517,7 @@ impl Renderer {
     }
 
     /// Starts a frame: clears the targets (and the fill counter in count frames),
-    /// then records the base passes: camera G-buffer, light G-buffers, direct light.
+    /// then records the base passes: camera G-buffer, shadow maps, direct light.
     pub fn begin_frame<'a>(
         &'a self,
         profiler: &'a mut PassProfiler,
@@ -551,11 +553,11 @@ impl Renderer {
             &self.camera_gbuffer,
         )?;
         for light in &self.lights {
-            self.gbuffer_pass.record(
+            self.gbuffer_pass.record_shadow_map(
                 &mut frame,
-                "base/light_gbuffer",
+                "base/shadow_map",
                 &self.scene,
-                &light.gbuffer,
+                &light.shadow,
             )?;
         }
         for light in &self.lights {

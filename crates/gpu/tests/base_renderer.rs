@@ -115,8 +115,21 @@ fn point_light_cube_gbuffer_sees_the_first_surface_along_each_texel_ray() {
     let tmp = tempfile::tempdir().expect("tempdir");
     let path = small_copy(tmp.path(), "ring", 64, 48);
     let (ctx, renderer) = render(&path);
-    let (view, gb) = renderer.light(0).expect("one light");
+    let (view, shadow) = renderer.light(0).expect("one light");
     assert_eq!(view.faces.len(), 6, "a point light renders a cube");
+    assert_eq!(shadow.depth.texture.depth_or_array_layers(), 6);
+    // A light G-buffer as a method would make one: allocate it for the light's view
+    // and record it into a frame.
+    let gb = renderer.gbuffer_pass().light_gbuffer(&ctx.device, view);
+    let mut profiler = PassProfiler::new(&ctx, 1);
+    let mut frame = renderer
+        .begin_frame(&mut profiler, FrameMode::Timed)
+        .expect("frame");
+    renderer
+        .gbuffer_pass()
+        .record(&mut frame, "test/light_gbuffer", renderer.scene(), &gb)
+        .expect("record");
+    frame.submit(&ctx).expect("submit");
     let light = view.origin;
     let res = view.resolution;
     let (ring_c, ring_r, half_h) = (Vec3::new(0.0, 0.25, 0.0), 1.0f32, 0.25f32);
