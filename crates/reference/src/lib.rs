@@ -4,8 +4,8 @@
 //! in radiance (W·m⁻²·sr⁻¹, pixel = average over its area, row 0 at the top), with a
 //! per-pixel standard-error image from independent batches.
 //!
-//! Photons leave the lights aimed at the specular objects ([`emission`](crate) docs
-//! in `emission.rs`), follow dielectrics (exact unpolarized Fresnel, Snell, TIR) and
+//! Photons leave the lights aimed at the specular objects (see `emission.rs`
+//! for the weights), follow dielectrics (exact unpolarized Fresnel, Snell, TIR) and
 //! mirrors, and at their first diffuse hit after ≥ 1 specular event are connected to
 //! the pinhole (the formula and its derivation are in `sensor.rs`). It knows no GPU
 //! and no method, so it stays an independent check.
