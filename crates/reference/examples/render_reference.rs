@@ -48,6 +48,21 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         r.seconds,
         r.photons as f64 / r.seconds / 1e6
     );
+    // Mean over caustic pixels (luminance > 0) of the standard error, relative to
+    // the mean caustic luminance there (the harness's `relative_stderr`).
+    let lum = |p: &[f32; 3]| 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2];
+    let (mut sum, mut err, mut n) = (0f64, 0f64, 0f64);
+    for (p, e) in r.caustic.pixels.iter().zip(&r.caustic_stderr.pixels) {
+        if lum(p) > 0.0 {
+            sum += lum(p) as f64;
+            err += lum(e) as f64;
+            n += 1.0;
+        }
+    }
+    println!(
+        "relative stderr over {n} caustic pixels: {:.4}",
+        err / sum.max(f64::MIN_POSITIVE)
+    );
     let mut images = vec![("caustic", &r.caustic), ("stderr", &r.caustic_stderr)];
     if let (Some(v), Some(e)) = (&r.volume, &r.volume_stderr) {
         images.push(("volume", v));

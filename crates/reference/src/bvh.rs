@@ -81,7 +81,7 @@ impl Triangles {
         }
         let bvh = build_cwbvh_from_tris(
             &tris,
-            BvhBuildParams::fast_build(),
+            BvhBuildParams::medium_build(),
             &mut Duration::default(),
         );
         // Reorder the primitives to BVH order so traversal needs no indirection.

@@ -61,7 +61,7 @@ use crate::accumulate::{Accumulator, Plan, UNIT_PHOTONS};
 use crate::emission::{Emitter, Target};
 use crate::geometry::Geometry;
 use crate::sensor::Sensor;
-use crate::tracer::{PowerFilter, Tracer};
+use crate::tracer::{PowerFilter, Tracer, UnitOutput};
 
 pub use eps::EPSILON_POLICY;
 
@@ -271,13 +271,15 @@ impl Reference {
         // Rounds per group: enough units to keep every thread busy.
         let group = (2 * rayon::current_num_threads() as u64).div_ceil(b).max(1);
         let mut rounds = 0u64;
+        // Splat buffers, reused by every group.
+        let mut outs: Vec<UnitOutput> = Vec::new();
         while rounds < plan.rounds {
             let n = group.min(plan.rounds - rounds);
             let first = rounds * b;
-            let outs: Vec<_> = (first..first + n * b)
-                .into_par_iter()
-                .map(|k| tracer.run_unit(opts.seed, k, plan.unit))
-                .collect();
+            outs.resize_with((n * b) as usize, UnitOutput::default);
+            outs.par_iter_mut()
+                .enumerate()
+                .for_each(|(i, out)| tracer.run_unit(opts.seed, first + i as u64, plan.unit, out));
             acc.add(first, &outs);
             rounds += n;
             progress(rounds * b * plan.unit as u64);

@@ -101,21 +101,25 @@ fn exp3(v: Vec3) -> Vec3 {
 
 impl Tracer<'_> {
     /// Traces unit `unit` of `count` photons (and as many direct photons if asked).
-    pub(crate) fn run_unit(&self, seed: u64, unit: u64, count: u32) -> UnitOutput {
-        let mut out = UnitOutput::default();
+    /// `out` is cleared first; its buffers are reused (no allocation per unit once
+    /// they have grown).
+    pub(crate) fn run_unit(&self, seed: u64, unit: u64, count: u32, out: &mut UnitOutput) {
+        out.surface.clear();
+        out.volume.clear();
+        out.direct.clear();
+        out.power = [0.0; 3];
         if !self.caustic.is_empty() {
             let mut rng = UnitRng::new(seed, 0, unit);
             for _ in 0..count {
-                self.trace(self.caustic, true, &mut rng, &mut out);
+                self.trace(self.caustic, true, &mut rng, out);
             }
         }
         if let Some(direct) = self.direct.filter(|e| !e.is_empty()) {
             let mut rng = UnitRng::new(seed, 1, unit);
             for _ in 0..count {
-                self.trace(direct, false, &mut rng, &mut out);
+                self.trace(direct, false, &mut rng, out);
             }
         }
-        out
     }
 
     fn trace(&self, emitter: &Emitter, caustic: bool, rng: &mut UnitRng, out: &mut UnitOutput) {
