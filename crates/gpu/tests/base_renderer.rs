@@ -215,3 +215,65 @@ fn point_light_cube_gbuffer_sees_the_first_surface_along_each_texel_ray() {
     }
     assert!(checked > 100, "only {checked} texels checked");
 }
+
+/// Where the segment from `p` to the light crosses the open cylinder x²+z² = 1,
+/// 0 <= y <= 0.5 (the ring): the crossing heights.
+fn ring_crossings(p: Vec3, light: Vec3) -> Vec<f32> {
+    let d = light - p;
+    let (a, b, c) = (
+        d.x * d.x + d.z * d.z,
+        p.x * d.x + p.z * d.z,
+        p.x * p.x + p.z * p.z - 1.0,
+    );
+    let disc = b * b - a * c;
+    if a < 1e-12 || disc < 0.0 {
+        return vec![];
+    }
+    [(-b - disc.sqrt()) / a, (-b + disc.sqrt()) / a]
+        .into_iter()
+        .filter(|t| (0.0..=1.0).contains(t))
+        .map(|t| p.y + t * d.y)
+        .collect()
+}
+
+#[test]
+fn point_light_direct_light_is_inverse_square_and_shadowed_by_the_ring_across_cube_faces() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let path = small_copy(tmp.path(), "ring", 256, 192);
+    let (ctx, renderer) = render(&path);
+    let cam = &renderer.scene().scene.camera;
+    let gb = renderer.camera_gbuffer();
+    let pos = read_rgba32f(&ctx, &gb.position.texture, "position").expect("position");
+    let id = ids(&ctx, &gb.ids.texture, 0);
+    let direct = read_rgba32f(&ctx, &renderer.targets().direct.texture, "direct").expect("direct");
+    let (light, intensity, albedo) = (Vec3::new(0.85, 1.0, 0.0), 20.0f32, 0.8f32);
+    let (mut lit, mut shadowed) = (0, 0);
+    for i in 0..(cam.width * cam.height) as usize {
+        if pos[4 * i + 3] < 0.5 || id[i][0] != 1 {
+            continue;
+        }
+        let p = Vec3::new(pos[4 * i], pos[4 * i + 1], pos[4 * i + 2]);
+        let value = direct[4 * i];
+        let crossings = ring_crossings(p, light);
+        // Far from the ring's rims and base (where shadow-map texels straddle edges).
+        let off_base = (Vec3::new(p.x, 0.0, p.z).length() - 1.0).abs() > 0.03;
+        if off_base && crossings.iter().all(|&y| !(-0.03..=0.53).contains(&y)) {
+            let to_light = light - p;
+            let r2 = to_light.length_squared();
+            let expected =
+                albedo / std::f32::consts::PI * intensity * (to_light.y / r2.sqrt()) / r2;
+            assert!(
+                (value - expected).abs() < 5e-3 * expected,
+                "lit floor at {p}: {value} vs {expected}"
+            );
+            lit += 1;
+        } else if crossings.iter().any(|&y| (0.03..0.47).contains(&y)) {
+            assert_eq!(value, 0.0, "floor at {p} is behind the ring wall");
+            shadowed += 1;
+        }
+    }
+    assert!(
+        lit > 5_000 && shadowed > 5_000,
+        "lit {lit}, shadowed {shadowed}"
+    );
+}

@@ -38,16 +38,18 @@ fn cube_face(d: vec3<f32>) -> u32 {
 }
 
 fn visibility(p: vec3<f32>, n: vec3<f32>, dist: f32) -> f32 {
-    var face = 0u;
-    if u32(dl.params.x) == 6u {
-        face = cube_face(p - dl.light.position.xyz);
-    }
     // Normal offset of ~2 texels at this distance keeps flat receivers from self-shadowing.
     let texel = select(dl.params.z * dist, dl.params.z, dl.params.w > 0.5);
     let q = p + n * (2.0 * texel);
+    let cube = u32(dl.params.x) == 6u;
+    var face = 0u;
+    if cube {
+        // The face is chosen for the point actually looked up, so it is inside that face.
+        face = cube_face(q - dl.light.position.xyz);
+    }
     let clip = dl.face_view_proj[face] * vec4<f32>(q, 1.0);
     let ndc = clip.xyz / clip.w;
-    if any(abs(ndc.xy) > vec2<f32>(1.0)) || ndc.z < 0.0 || ndc.z > 1.0 {
+    if !cube && (any(abs(ndc.xy) > vec2<f32>(1.0)) || ndc.z < 0.0 || ndc.z > 1.0) {
         // Outside the light's frustum: lit for directional (fitted to the scene), unlit
         // outside a spot's cone (the cone factor is 0 there anyway).
         return 1.0;
@@ -57,6 +59,7 @@ fn visibility(p: vec3<f32>, n: vec3<f32>, dist: f32) -> f32 {
     var sum = 0.0;
     for (var y = -1; y <= 1; y++) {
         for (var x = -1; x <= 1; x++) {
+            // Taps past a face's edge clamp to it (the sampler clamps to edge).
             let o = vec2<f32>(f32(x), f32(y)) / res;
             sum += textureSampleCompareLevel(shadow_map, shadow_sampler, uv + o, face, ndc.z - 1e-5);
         }
