@@ -406,3 +406,48 @@ fn a_cached_reference_is_found_by_scene_hash_and_used() {
         "{err}"
     );
 }
+
+#[test]
+fn flat_mirror_gives_the_analytic_reflected_radiance_within_one_percent() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let (reflectance, albedo, irradiance) =
+        ([0.9f64, 0.7, 0.5], [0.8f64, 0.6, 0.4], [1.0f64, 2.0, 0.5]);
+    // A vertical mirror (normal +x) under light travelling along (-1, -1, 0): the
+    // reflected beam travels along (1, -1, 0) and meets the floor at 45 degrees.
+    let scene = serde_json::json!({
+        "name": "flat_mirror",
+        "description": "a vertical mirror reflecting a directional light onto a floor",
+        "camera": {"eye": [1, 2, 0], "target": [1, 0, 0], "up": [0, 0, -1], "fov_y_deg": 40, "width": 160, "height": 120},
+        "lights": [{"type": "directional", "direction": [-1, -1, 0], "irradiance": irradiance}],
+        "materials": {"mirror": {"type": "mirror", "reflectance": reflectance}, "floor": {"type": "diffuse", "albedo": albedo}},
+        "objects": [
+            {"shape": {"type": "quad", "center": [0, 1.5, 0], "normal": [1, 0, 0], "size": [3, 6]}, "material": "mirror"},
+            {"shape": {"type": "quad", "center": [2, 0, 0], "normal": [0, 1, 0], "size": [4, 6]}, "material": "floor"}
+        ]
+    });
+    let path = tmp.path().join("flat_mirror.json");
+    std::fs::write(&path, serde_json::to_string_pretty(&scene).expect("json")).expect("write");
+    let mut o = options(&path, tmp.path());
+    o.params = vec!["grid=64".into()];
+    let (dir, result) = run_done(&o);
+    assert_eq!(result.counters["dropped_face_mismatch"], 0);
+    let surface = read_exr(&dir.join("surface.exr")).expect("surface.exr");
+    let cos_floor = std::f64::consts::FRAC_1_SQRT_2;
+    let (w, h) = (surface.width, surface.height);
+    for y in h / 4..3 * h / 4 {
+        for x in w / 4..3 * w / 4 {
+            let p = surface.get(x, y);
+            for c in 0..3 {
+                let expected =
+                    albedo[c] / std::f64::consts::PI * reflectance[c] * irradiance[c] * cos_floor;
+                let rel = (p[c] as f64 - expected).abs() / expected;
+                assert!(
+                    rel < 0.01,
+                    "pixel ({x},{y}) channel {c}: {} vs analytic {expected} ({:.3}%)",
+                    p[c],
+                    rel * 100.0
+                );
+            }
+        }
+    }
+}

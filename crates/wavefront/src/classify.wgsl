@@ -1,6 +1,6 @@
 // Pass 2 of wavefront: keep the triangles whose three vertices are valid and land on
-// the same side of the same receiver (a triangle spanning two receivers has no
-// single area to take a ratio of), as one flag per triangle. Dropped triangles are
+// the same side of the same receiver, from the same face of the generator (a
+// triangle spanning two receivers or two faces has no single area to take a ratio of), as one flag per triangle. Dropped triangles are
 // counted by reason. Flags rather than a compacted list: the splat pass then draws
 // in triangle order, so additive blending sums in the same order every frame and
 // the image is bit-for-bit deterministic (an atomic compaction order is not).
@@ -9,7 +9,7 @@ struct Counters {
     kept: atomic<u32>,
     dropped_invalid_vertex: atomic<u32>,
     dropped_receiver_mismatch: atomic<u32>,
-    pad: u32,
+    dropped_face_mismatch: atomic<u32>,
 }
 
 @group(1) @binding(0) var<uniform> tp: TraceParams;
@@ -34,6 +34,10 @@ fn classify_triangles(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     if a.info.x != b.info.x || a.info.x != c.info.x || a.new_pos.w != b.new_pos.w || a.new_pos.w != c.new_pos.w {
         atomicAdd(&counters.dropped_receiver_mismatch, 1u);
+        return;
+    }
+    if a.info.z != b.info.z || a.info.z != c.info.z {
+        atomicAdd(&counters.dropped_face_mismatch, 1u);
         return;
     }
     keep[tri] = 1u;

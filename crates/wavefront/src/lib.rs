@@ -12,11 +12,13 @@
 //! transmittance of each interface, so the result is absolute radiance
 //! ρ/π · E in DESIGN units. For flat water it is exactly ρ/π · T(θ) · E · cos θ.
 //!
-//! Supports one dielectric caustic generator (an open heightfield, refracted once,
-//! or an analytic sphere, refracted on entry and exit), one light of any kind and
-//! analytic diffuse receivers (quads, spheres, cylinders). It does not follow
-//! reflection, chains of specular objects, meshes or media: such scenes are skipped
-//! with the reason. Like the original, it ignores the light reflected at the
+//! Supports one caustic generator: a dielectric heightfield or quad (refracted once,
+//! Wallace's water) or sphere (refracted on entry and exit), or a mirror sphere, quad
+//! or open cylinder (reflected once, Wallace's "reflection off the top of the water"
+//! and Wand's ring); one light of any kind; analytic diffuse receivers (quads,
+//! spheres, cylinders). It does not follow chains of specular events (a ray that meets
+//! a specular surface again is dropped), meshes or media: such scenes are skipped with
+//! the reason. Like the original, it ignores the light reflected at dielectric
 //! interfaces and point-samples triangles thinner than a pixel (noisy cusps).
 
 mod sources;
@@ -52,7 +54,8 @@ pub const NAME: &str = "wavefront";
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 #[serde(default, deny_unknown_fields)]
 pub struct WavefrontParams {
-    /// Rays per side of the light-ray lattice over an analytic (sphere) refractor.
+    /// Rays per side of the light-ray lattice over an analytic generator (sphere,
+    /// quad, cylinder).
     /// Heightfields use their own vertex grid, as Wallace does.
     pub grid: u32,
     /// A caustic fragment counts only where the camera G-buffer's surface is within
@@ -97,12 +100,12 @@ impl WavefrontParams {
 pub fn info() -> MethodInfo {
     MethodInfo {
         name: NAME,
-        summary: "refracted wavefront mesh, brightness = area ratio from screen-space derivatives",
+        summary: "refracted or reflected wavefront mesh, brightness = area ratio from screen-space derivatives",
         source: "Wallace 2016, Rendering Realtime Caustics in WebGL (wallace-2016-webgl-caustics.txt)",
         capabilities: Capabilities {
             surface: true,
             volume: false,
-            reflection: false,
+            reflection: true,
             refraction: true,
             multiple_bounces: false,
             directional_light: true,
@@ -113,7 +116,7 @@ pub fn info() -> MethodInfo {
             param_specs::<WavefrontParams>(&[
                 (
                     "grid",
-                    "rays per side of the light-ray lattice over a sphere refractor (heightfields use their vertex grid)",
+                    "rays per side of the light-ray lattice over an analytic generator (heightfields use their vertex grid)",
                 ),
                 (
                     "tolerance",
@@ -127,7 +130,10 @@ pub fn info() -> MethodInfo {
     }
 }
 
-/// The one specular object `wavefront` refracts through, or why the scene is out of reach.
+/// The one specular object `wavefront` traces light through (the caustic
+/// generator), or why the scene is out of reach: a dielectric heightfield, quad or
+/// sphere, or a mirror sphere, quad or open cylinder; every other object an analytic
+/// diffuse receiver.
 pub fn caustic_generator(scene: &Scene) -> Result<usize, Unsupported> {
     if scene.lights.len() != 1 {
         return Err(Unsupported(format!(
@@ -137,39 +143,49 @@ pub fn caustic_generator(scene: &Scene) -> Result<usize, Unsupported> {
     }
     let mut generator = None;
     for (i, o) in scene.objects.iter().enumerate() {
-        let specular = scene.material(o).is_specular();
-        match (&o.shape, specular) {
-            (Shape::Heightfield(_) | Shape::Sphere { .. }, true) => {
-                if let Some(first) = generator {
+        let material = scene.material(o);
+        if !material.is_specular() {
+            match &o.shape {
+                Shape::Mesh(_) => {
                     return Err(Unsupported(format!(
-                        "objects[{first}] and objects[{i}] are both specular; wavefront follows one refraction event (no chains)"
+                        "objects[{i}] is a mesh; wavefront traces analytic shapes only"
                     )));
                 }
-                if !matches!(scene.material(o), Material::Dielectric { .. }) {
+                Shape::Heightfield(_) => {
                     return Err(Unsupported(format!(
-                        "objects[{i}] is a mirror; wavefront handles refraction only"
+                        "objects[{i}] is a diffuse heightfield; wavefront receivers must be analytic"
                     )));
                 }
-                generator = Some(i);
+                _ => continue,
             }
-            (Shape::Mesh(_), _) => {
-                return Err(Unsupported(format!(
-                    "objects[{i}] is a mesh; wavefront traces analytic shapes only"
-                )));
-            }
-            (Shape::Heightfield(_), false) => {
-                return Err(Unsupported(format!(
-                    "objects[{i}] is a diffuse heightfield; wavefront receivers must be analytic"
-                )));
-            }
-            (_, true) => {
-                return Err(Unsupported(format!(
-                    "objects[{i}] is a specular {}; wavefront refracts through heightfields and spheres only",
-                    shape_name(&o.shape)
-                )));
-            }
-            _ => {}
         }
+        let supported = matches!(
+            (material, &o.shape),
+            (
+                Material::Dielectric { .. },
+                Shape::Heightfield(_) | Shape::Quad { .. } | Shape::Sphere { .. }
+            ) | (
+                Material::Mirror { .. },
+                Shape::Sphere { .. } | Shape::Quad { .. } | Shape::Cylinder { .. }
+            )
+        );
+        if !supported {
+            return Err(Unsupported(format!(
+                "objects[{i}] is a specular {} ({}); wavefront traces dielectric heightfields, quads and spheres and mirror spheres, quads and cylinders",
+                shape_name(&o.shape),
+                if matches!(material, Material::Mirror { .. }) {
+                    "mirror"
+                } else {
+                    "dielectric"
+                }
+            )));
+        }
+        if let Some(first) = generator {
+            return Err(Unsupported(format!(
+                "objects[{first}] and objects[{i}] are both specular; wavefront follows one specular event (no chains)"
+            )));
+        }
+        generator = Some(i);
     }
     generator.ok_or_else(|| Unsupported("the scene has no specular object".into()))
 }
@@ -184,19 +200,15 @@ fn shape_name(s: &Shape) -> &'static str {
     }
 }
 
-fn check_scene(scene: &Scene, params: &serde_json::Value) -> Result<(), Unsupported> {
+fn check_scene(scene: &Scene, _params: &serde_json::Value) -> Result<(), Unsupported> {
     let g = caustic_generator(scene)?;
-    if let (Shape::Sphere { center, radius }, Some(light)) =
-        (&scene.objects[g].shape, scene.lights.first())
-    {
-        let grid = parse_params::<WavefrontParams>(NAME, params)
-            .map(|p| p.grid)
-            .unwrap_or(2)
-            .max(2);
-        if sources::sphere_rays(*center, *radius, light, grid.min(2)).is_none() {
-            return Err(Unsupported(
-                "the light is inside the refracting sphere".into(),
-            ));
+    let shape = &scene.objects[g].shape;
+    if !matches!(shape, Shape::Heightfield(_)) {
+        let (center, radius) = sources::bounding_sphere(shape);
+        if sources::ray_lattice(center, radius, &scene.lights[0], 2).is_none() {
+            return Err(Unsupported(format!(
+                "the light is inside the bounding sphere of the generator objects[{g}], which wavefront's ray lattice must see from outside"
+            )));
         }
     }
     Ok(())
@@ -582,6 +594,7 @@ impl CausticsMethod for Wavefront {
         out.insert("kept_triangles".into(), c[0] as u64);
         out.insert("dropped_invalid_vertex".into(), c[1] as u64);
         out.insert("dropped_receiver_mismatch".into(), c[2] as u64);
+        out.insert("dropped_face_mismatch".into(), c[3] as u64);
         Ok(out)
     }
 

@@ -3,10 +3,11 @@
 //!
 //! * Open heightfield refractor: Wallace's construction, the water mesh itself. Each
 //!   vertex is where a light ray meets the surface, with the analytic normal.
-//! * Closed analytic refractor (sphere): a regular grid of light rays covering the
-//!   sphere as the light sees it: a square on the plane through the centre
-//!   perpendicular to a directional light, or a square of directions around the
-//!   cone a point/spot light sees the sphere in.
+//! * Analytic generator (refracting sphere or quad; mirror sphere, quad or open
+//!   cylinder): a regular grid of light rays covering the generator's bounding sphere
+//!   as the light sees it: a square on the plane through the centre perpendicular to
+//!   a directional light, or a square of directions around the cone a point/spot
+//!   light sees the sphere in. Rays that miss the generator are dropped by the trace.
 
 use bytemuck::{Pod, Zeroable};
 use caustics_scene::{Light, Shape, TriangleMesh, Vec3};
@@ -65,10 +66,10 @@ pub(crate) fn from_surface(mesh: &TriangleMesh) -> WavefrontMesh {
     }
 }
 
-/// Sphere: a `grid`×`grid` lattice of light rays covering it (2 % margin, so that the
-/// silhouette lies inside the lattice; rays that miss are dropped by the trace).
-/// Returns `None` when a point/spot light sits inside the sphere.
-pub(crate) fn sphere_rays(
+/// A `grid`×`grid` lattice of light rays covering the sphere (`center`, `radius`)
+/// with a 2 % margin, so that the silhouette lies inside the lattice. Returns `None`
+/// when a point/spot light sits inside the sphere.
+pub(crate) fn ray_lattice(
     center: Vec3,
     radius: f32,
     light: &Light,
@@ -118,7 +119,26 @@ pub(crate) fn sphere_rays(
     })
 }
 
-/// The wavefront of `shape` (the scene's one specular object), if `wavefront` can build one.
+/// The smallest sphere the lattice must cover for an analytic generator.
+pub(crate) fn bounding_sphere(shape: &Shape) -> (Vec3, f32) {
+    match shape {
+        Shape::Sphere { center, radius } => (*center, *radius),
+        Shape::Quad { center, size, .. } => (*center, 0.5 * size.length()),
+        Shape::Cylinder {
+            center,
+            radius,
+            height,
+            ..
+        } => (*center, radius.hypot(0.5 * height)),
+        other => {
+            let b = other.bounds();
+            (b.center(), b.bounding_sphere_radius())
+        }
+    }
+}
+
+/// The wavefront of `shape` (the scene's one specular object): its vertex grid for a
+/// heightfield, else a ray lattice over its bounding sphere (`None`: light inside it).
 pub(crate) fn for_shape(
     shape: &Shape,
     mesh: &TriangleMesh,
@@ -127,8 +147,10 @@ pub(crate) fn for_shape(
 ) -> Option<WavefrontMesh> {
     match shape {
         Shape::Heightfield(_) => Some(from_surface(mesh)),
-        Shape::Sphere { center, radius } => sphere_rays(*center, *radius, light, grid),
-        _ => None,
+        other => {
+            let (center, radius) = bounding_sphere(other);
+            ray_lattice(center, radius, light, grid)
+        }
     }
 }
 
@@ -149,7 +171,7 @@ mod tests {
             direction: Vec3::new(0.0, -1.0, 0.0),
             irradiance: Vec3::ONE,
         };
-        let m = sphere_rays(Vec3::new(0.0, 1.0, 0.0), 1.0, &light, 9).expect("light outside");
+        let m = ray_lattice(Vec3::new(0.0, 1.0, 0.0), 1.0, &light, 9).expect("light outside");
         assert_eq!(m.sources.len(), 81);
         let xs: Vec<f32> = m.sources.iter().map(|s| s.origin[0]).collect();
         let max = xs.iter().cloned().fold(f32::MIN, f32::max);
@@ -167,6 +189,6 @@ mod tests {
             position: Vec3::ZERO,
             intensity: Vec3::ONE,
         };
-        assert!(sphere_rays(Vec3::ZERO, 1.0, &light, 4).is_none());
+        assert!(ray_lattice(Vec3::ZERO, 1.0, &light, 4).is_none());
     }
 }

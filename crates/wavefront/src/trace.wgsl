@@ -1,8 +1,9 @@
 // Pass 1 of wavefront (Wallace 2016): trace one light ray per wavefront vertex
-// through the specular object (one refraction for an open heightfield, two for a
-// closed sphere) to the first diffuse receiver, and record where it started in the
-// light's parametrization ("old": the light plane for a directional light, the unit
-// sphere of directions for a point/spot light) and where it lands ("new").
+// through the caustic generator (a dielectric: one refraction at an open surface,
+// two through a closed sphere; a mirror: one reflection) to the first diffuse
+// receiver, and record where it started in the light's parametrization ("old": the
+// light plane for a directional light, the unit sphere of directions for a
+// point/spot light) and where it lands ("new").
 
 struct Source {
     // xyz: a point on the specular surface (SOURCE_SURFACE) or a ray origin (SOURCE_RAY); w: kind.
@@ -19,6 +20,8 @@ const INVALID_MISSED_SPECULAR: u32 = 1u;
 const INVALID_SHADOWED: u32 = 2u;
 const INVALID_TIR: u32 = 3u;
 const INVALID_NO_RECEIVER: u32 = 4u;
+// The ray meets a specular surface again (e.g. a second bounce inside a ring):
+// wavefront follows one specular event.
 const INVALID_SPECULAR_RECEIVER: u32 = 5u;
 
 @group(1) @binding(0) var<uniform> tp: TraceParams;
@@ -30,23 +33,16 @@ struct SceneHit {
     object: u32,
 }
 
-// Closest analytic object along a ray, skipping `skip`. Heightfields and meshes are
-// not intersected: `wavefront` declares scenes with them as receivers unsupported.
+// Closest analytic object along a ray, skipping `skip` (NONE: skip nothing).
+// Heightfields and meshes are not intersected: `wavefront` declares scenes with them
+// as receivers unsupported.
 fn closest_analytic_hit(o: vec3<f32>, d: vec3<f32>, t_min: f32, skip: u32) -> SceneHit {
     var best = SceneHit(NO_HIT, NONE);
     for (var i = 0u; i < frame.counts.x; i++) {
         if i == skip {
             continue;
         }
-        let obj = objects[i];
-        var t = NO_HIT;
-        if obj.kind == OBJ_SPHERE {
-            t = intersect_sphere(o, d, obj.p0.xyz, obj.p0.w, t_min);
-        } else if obj.kind == OBJ_QUAD {
-            t = intersect_quad(o, d, obj, t_min);
-        } else if obj.kind == OBJ_CYLINDER {
-            t = intersect_cylinder(o, d, obj, t_min);
-        }
+        let t = intersect_analytic(o, d, objects[i], t_min);
         if t < best.t {
             best = SceneHit(t, i);
         }
@@ -85,16 +81,16 @@ fn trace_vertices(@builtin(global_invocation_id) gid: vec3<u32>) {
     let src = sources[i];
     let light = lights[tp.light_index];
     let obj = objects[tp.specular_object];
-    let ior = materials[obj.material].ior;
+    let mat = materials[obj.material];
     let eps = 1e-4;
 
-    // Entry point on the specular surface and the light direction there.
+    // Hit point on the generator and the light direction there.
     var p: vec3<f32>;
     var n_out: vec3<f32>;
     var d: vec3<f32>;
     if src.origin.w == SOURCE_RAY {
         d = src.dir_or_normal.xyz;
-        let t = intersect_sphere(src.origin.xyz, d, obj.p0.xyz, obj.p0.w, 0.0);
+        let t = intersect_analytic(src.origin.xyz, d, obj, 0.0);
         if t >= NO_HIT {
             traced[i] = invalid(INVALID_MISSED_SPECULAR);
             return;
@@ -110,6 +106,10 @@ fn trace_vertices(@builtin(global_invocation_id) gid: vec3<u32>) {
             d = normalize(p - light.position.xyz);
         }
     }
+    // Which face of the generator the light meets (0 outside, 1 inside): a
+    // triangle whose vertices meet different faces (outer and inner wall of a ring)
+    // spans no continuous wavefront.
+    let face = select(0u, 1u, dot(d, n_out) > 0.0);
 
     // Light-space coordinate and the flux density the vertex carries.
     var old_pos: vec3<f32>;
@@ -125,41 +125,46 @@ fn trace_vertices(@builtin(global_invocation_id) gid: vec3<u32>) {
         light_dist = length(p - light.position.xyz);
     }
 
-    // Is the entry point lit? (walls or other objects between light and surface)
+    // Is the hit point lit? (walls or other objects between light and surface)
     let shadow = closest_analytic_hit(p, -d, eps, tp.specular_object);
     if shadow.t < light_dist - eps {
         traced[i] = invalid(INVALID_SHADOWED);
         return;
     }
 
-    // First interface.
-    let r1 = refract_through(d, n_out, ior);
-    if r1.w < 0.0 {
-        traced[i] = invalid(INVALID_TIR);
-        return;
-    }
-    flux *= r1.w;
-    d = r1.xyz;
-
-    // Closed refractor: leave it through the second interface.
-    if obj.kind == OBJ_SPHERE {
-        let t = intersect_sphere(p, d, obj.p0.xyz, obj.p0.w, eps);
-        if t >= NO_HIT {
-            traced[i] = invalid(INVALID_MISSED_SPECULAR);
-            return;
-        }
-        p = p + t * d;
-        let r2 = refract_through(d, analytic_normal(obj, p), ior);
-        if r2.w < 0.0 {
+    if mat.kind == MAT_MIRROR {
+        // DESIGN: mirrors reflect with their reflectance at every angle, both sides.
+        flux *= mat.color.xyz;
+        d = reflect(d, n_out);
+    } else {
+        let r1 = refract_through(d, n_out, mat.ior);
+        if r1.w < 0.0 {
             traced[i] = invalid(INVALID_TIR);
             return;
         }
-        flux *= r2.w;
-        d = r2.xyz;
+        flux *= r1.w;
+        d = r1.xyz;
+        // Closed refractor: leave it through the second interface.
+        if obj.kind == OBJ_SPHERE {
+            let t = intersect_sphere(p, d, obj.p0.xyz, obj.p0.w, eps);
+            if t >= NO_HIT {
+                traced[i] = invalid(INVALID_MISSED_SPECULAR);
+                return;
+            }
+            p = p + t * d;
+            let r2 = refract_through(d, analytic_normal(obj, p), mat.ior);
+            if r2.w < 0.0 {
+                traced[i] = invalid(INVALID_TIR);
+                return;
+            }
+            flux *= r2.w;
+            d = r2.xyz;
+        }
     }
 
-    // First receiver along the refracted ray.
-    let hit = closest_analytic_hit(p, d, eps, tp.specular_object);
+    // First surface along the outgoing ray, the generator included (a second
+    // specular event invalidates the vertex).
+    let hit = closest_analytic_hit(p, d, eps, NONE);
     if hit.object == NONE {
         traced[i] = invalid(INVALID_NO_RECEIVER);
         return;
@@ -175,6 +180,6 @@ fn trace_vertices(@builtin(global_invocation_id) gid: vec3<u32>) {
     v.old_pos = vec4<f32>(old_pos, 0.0);
     v.new_pos = vec4<f32>(q, side);
     v.flux = vec4<f32>(flux, 0.0);
-    v.info = vec4<u32>(hit.object, INVALID_NONE, 0u, 0u);
+    v.info = vec4<u32>(hit.object, INVALID_NONE, face, 0u);
     traced[i] = v;
 }

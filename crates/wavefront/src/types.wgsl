@@ -8,7 +8,8 @@ struct Traced {
     new_pos: vec4<f32>,
     // rgb: flux density carried (W per m² of light plane, or W per sr): emitted × Fresnel transmittances.
     flux: vec4<f32>,
-    // x: receiver object (NONE if the vertex is invalid), y: why invalid (0 valid).
+    // x: receiver object (NONE if the vertex is invalid), y: why invalid (0 valid),
+    // z: face of the generator the light met (0 outside, 1 inside).
     info: vec4<u32>,
 }
 

@@ -156,6 +156,21 @@ fn intersect_cylinder(o: vec3<f32>, d: vec3<f32>, obj: GpuObject, t_min: f32) ->
     return NO_HIT;
 }
 
+// Ray against any analytic object (sphere, quad, open cylinder); NO_HIT for the
+// others (heightfields and meshes have no closed form).
+fn intersect_analytic(o: vec3<f32>, d: vec3<f32>, obj: GpuObject, t_min: f32) -> f32 {
+    if obj.kind == OBJ_SPHERE {
+        return intersect_sphere(o, d, obj.p0.xyz, obj.p0.w, t_min);
+    }
+    if obj.kind == OBJ_QUAD {
+        return intersect_quad(o, d, obj, t_min);
+    }
+    if obj.kind == OBJ_CYLINDER {
+        return intersect_cylinder(o, d, obj, t_min);
+    }
+    return NO_HIT;
+}
+
 // Geometric unit normal of an analytic object at a point on it (outward).
 fn analytic_normal(obj: GpuObject, p: vec3<f32>) -> vec3<f32> {
     if obj.kind == OBJ_SPHERE {
