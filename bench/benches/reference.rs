@@ -13,7 +13,7 @@ use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 
 /// Photons per iteration: 8 rounds of 16 units of 2^14 (the fixed cost of a
 /// 1024×768 render, its 16 batch images, is then small beside the tracing).
-const PHOTONS: u64 = 8 * 16 << 14;
+const PHOTONS: u64 = 8 * (16 << 14);
 
 fn reference(c: &mut Criterion) {
     let mut group = c.benchmark_group("reference");
