@@ -129,10 +129,12 @@ pub struct Errors {
     pub rmse: f64,
     /// [`rel_mse`] with `eps = REL_MSE_EPS`.
     pub rel_mse: f64,
-    /// [`psnr`] with the reference's maximum as peak, dB.
+    /// [`psnr`] of the display-referred images ([`ToneMap::display`], peak 1), dB.
+    /// Taken after tone mapping so that a hot caustic focus does not set the peak.
     #[serde(with = "non_finite_f64")]
     pub psnr_db: f64,
-    /// [`ssim`](crate::ssim) on luminance, in `[-1, 1]`, 1 = identical.
+    /// [`ssim`](crate::ssim) of the display-referred luminance (range 1), in `[-1, 1]`,
+    /// 1 = identical.
     pub ssim: f64,
     /// Mean [`flip`](crate::flip) of the tone-mapped images, in `[0, 1]`, 0 = identical.
     pub flip: f64,
@@ -142,7 +144,9 @@ pub struct Errors {
     pub rmse_after_best_scale: f64,
 }
 
-/// Computes every metric of [`Errors`]; `tone` is the tone mapping used for FLIP.
+/// Computes every metric of [`Errors`]: RMSE, relMSE and the best scale on the linear
+/// HDR images; PSNR, SSIM and FLIP on the images tone-mapped by `tone` (the stated
+/// exposure), where a caustic's hot spot cannot swamp the range.
 pub fn all_errors(
     test: &HdrImage,
     reference: &HdrImage,
@@ -150,11 +154,12 @@ pub fn all_errors(
 ) -> Result<Errors, MetricsError> {
     check_pair(test, reference)?;
     let (best_scale, rmse_after_best_scale) = best_scale(test, reference)?;
+    let (display_test, display_reference) = (tone.display(test), tone.display(reference));
     Ok(Errors {
         rmse: rmse(test, reference)?,
         rel_mse: rel_mse(test, reference, REL_MSE_EPS)?,
-        psnr_db: psnr(test, reference, None)?,
-        ssim: crate::ssim(test, reference)?,
+        psnr_db: psnr(&display_test, &display_reference, Some(1.0))?,
+        ssim: crate::ssim_with_range(&display_test, &display_reference, Some(1.0))?,
         flip: crate::flip(test, reference, tone)?,
         best_scale,
         rmse_after_best_scale,

@@ -46,5 +46,5 @@ pub use crate::heatmap::{
 };
 pub use crate::image::{HdrImage, REC709_LUMINANCE, Rgb8Image, luminance};
 pub use crate::io::{atomic_write, atomic_write_with, read_exr, read_png, write_exr, write_png};
-pub use crate::ssim::ssim;
+pub use crate::ssim::{ssim, ssim_with_range};
 pub use crate::tonemap::{ToneMap, srgb_oetf};

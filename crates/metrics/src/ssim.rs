@@ -22,13 +22,29 @@ const K2: f64 = 0.03;
 /// work. The result is the mean of the per-pixel SSIM map: 1 for identical images, lower
 /// for any structural, contrast or brightness difference.
 pub fn ssim(test: &HdrImage, reference: &HdrImage) -> Result<f64, MetricsError> {
+    ssim_with_range(test, reference, None)
+}
+
+/// [`ssim`] with an explicit dynamic range `L` (e.g. 1 for display-referred images in
+/// [0, 1]); `None` takes the reference's maximum luminance as [`ssim`] does.
+pub fn ssim_with_range(
+    test: &HdrImage,
+    reference: &HdrImage,
+    range: Option<f64>,
+) -> Result<f64, MetricsError> {
     check_pair(test, reference)?;
-    let map = ssim_map(test, reference);
+    if let Some(l) = range.filter(|l| !(l.is_finite() && *l > 0.0)) {
+        return Err(MetricsError::InvalidParameter {
+            name: "range",
+            message: format!("must be positive and finite, got {l}"),
+        });
+    }
+    let map = ssim_map(test, reference, range);
     Ok(map.iter().sum::<f64>() / map.len() as f64)
 }
 
 /// The per-pixel SSIM map (row-major), see [`ssim`]; the inputs must already be checked.
-pub(crate) fn ssim_map(test: &HdrImage, reference: &HdrImage) -> Vec<f64> {
+pub(crate) fn ssim_map(test: &HdrImage, reference: &HdrImage, range: Option<f64>) -> Vec<f64> {
     let (w, h) = (test.width as usize, test.height as usize);
     let x: Vec<f64> = test
         .pixels
@@ -41,7 +57,7 @@ pub(crate) fn ssim_map(test: &HdrImage, reference: &HdrImage) -> Vec<f64> {
         .map(|&p| f64::from(crate::luminance(p)))
         .collect();
     let peak = y.iter().copied().fold(0.0f64, f64::max);
-    let l = if peak > 0.0 { peak } else { 1.0 };
+    let l = range.unwrap_or(if peak > 0.0 { peak } else { 1.0 });
     let c1 = (K1 * l) * (K1 * l);
     let c2 = (K2 * l) * (K2 * l);
 

@@ -77,6 +77,26 @@ impl ToneMap {
         (srgb_oetf(v) * 255.0).round() as u8
     }
 
+    /// The display-referred image: `srgb_oetf(clamp(linear × exposure, 0, 1))` per
+    /// channel, in [0, 1] and not quantized. PSNR and SSIM in [`crate::all_errors`]
+    /// are taken on it, like FLIP, so a hot caustic focus does not set their range.
+    pub fn display(&self, img: &HdrImage) -> HdrImage {
+        HdrImage {
+            width: img.width,
+            height: img.height,
+            pixels: img
+                .pixels
+                .iter()
+                .map(|p| {
+                    p.map(|c| {
+                        let v = (c * self.exposure_scale).clamp(0.0, 1.0);
+                        if v.is_nan() { 0.0 } else { srgb_oetf(v) }
+                    })
+                })
+                .collect(),
+        }
+    }
+
     /// Tone-maps a whole image.
     pub fn apply(&self, img: &HdrImage) -> Rgb8Image {
         Rgb8Image {

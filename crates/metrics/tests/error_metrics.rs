@@ -169,8 +169,13 @@ fn all_errors_bundles_the_individual_metrics() {
     let e = all_errors(&t, &r, &tone).expect("all_errors");
     assert_eq!(e.rmse, rmse(&t, &r).expect("rmse"));
     assert_eq!(e.rel_mse, rel_mse(&t, &r, REL_MSE_EPS).expect("rel_mse"));
-    assert_eq!(e.psnr_db, psnr(&t, &r, None).expect("psnr"));
-    assert_eq!(e.ssim, ssim(&t, &r).expect("ssim"));
+    // PSNR and SSIM are taken on the display-referred images (peak and range 1).
+    let (dt, dr) = (tone.display(&t), tone.display(&r));
+    assert_eq!(e.psnr_db, psnr(&dt, &dr, Some(1.0)).expect("psnr"));
+    assert_eq!(
+        e.ssim,
+        caustics_metrics::ssim_with_range(&dt, &dr, Some(1.0)).expect("ssim")
+    );
     assert_eq!(e.flip, flip(&t, &r, &tone).expect("flip"));
     let (s, after) = best_scale(&t, &r).expect("best_scale");
     assert_eq!((e.best_scale, e.rmse_after_best_scale), (s, after));
@@ -274,4 +279,26 @@ fn empty_images_are_errors() {
         flip(&e, &e, &ToneMap::default()),
         Err(MetricsError::Empty { .. })
     ));
+}
+
+#[test]
+fn a_hot_spot_does_not_swamp_psnr_and_ssim() {
+    // A reference with one pixel a thousand times brighter than the rest (a caustic
+    // focus): an error everywhere else must still show in PSNR and SSIM.
+    let mut r = structured(32, 32);
+    r.pixels[0] = [1000.0; 3];
+    let t = noisy(&r, 0.3, 5);
+    let tone = ToneMap::new(1.0);
+    let e = all_errors(&t, &r, &tone).expect("all_errors");
+    assert!(e.ssim < 0.95, "ssim {}", e.ssim);
+    assert!(e.psnr_db < 40.0, "psnr {}", e.psnr_db);
+    // While on the linear image with the peak as range both look near-perfect.
+    assert!(ssim(&t, &r).expect("ssim") > 0.999);
+}
+
+#[test]
+fn ssim_range_must_be_positive() {
+    let r = structured(8, 8);
+    assert!(caustics_metrics::ssim_with_range(&r, &r, Some(0.0)).is_err());
+    assert!(caustics_metrics::ssim_with_range(&r, &r, Some(f64::NAN)).is_err());
 }
