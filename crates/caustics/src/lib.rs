@@ -4,6 +4,7 @@
 //! the same way (DESIGN "The method contract").
 
 pub mod machine;
+pub mod reference_cmd;
 pub mod references;
 pub mod registry;
 pub mod result;

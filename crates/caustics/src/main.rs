@@ -3,6 +3,7 @@
 use std::process::ExitCode;
 
 use anyhow::Result;
+use caustics::reference_cmd::ReferenceArgs;
 use caustics::run::{EXIT_SKIPPED, RunOptions, RunOutcome};
 use caustics::{registry, run};
 use clap::{Parser, Subcommand};
@@ -24,6 +25,9 @@ enum Command {
     List,
     /// Render a scene with a method; write images, timings, fragment counts and errors.
     Run(RunOptions),
+    /// Render the CPU reference of a scene (surface and volume caustics with standard
+    /// errors) into the reference cache that `run` scores against.
+    Reference(ReferenceArgs),
 }
 
 fn list() {
@@ -53,6 +57,9 @@ fn main() -> ExitCode {
         Command::List => {
             list();
             Ok(ExitCode::SUCCESS)
+        }
+        Command::Reference(args) => {
+            caustics::reference_cmd::reference(&args).map(|()| ExitCode::SUCCESS)
         }
         Command::Run(opts) => run::run(&opts).map(|o| match o {
             RunOutcome::Done { dir, result } => {

@@ -47,7 +47,11 @@ pub struct ReferenceArgs {
 }
 
 fn to_hdr(img: &ReferenceImage) -> HdrImage {
-    HdrImage { width: img.width, height: img.height, pixels: img.pixels.clone() }
+    HdrImage {
+        width: img.width,
+        height: img.height,
+        pixels: img.pixels.clone(),
+    }
 }
 
 /// Mean standard error over caustic pixels relative to the mean caustic there
@@ -62,7 +66,11 @@ pub fn relative_stderr(caustic: &ReferenceImage, stderr: &ReferenceImage) -> f64
             n += 1;
         }
     }
-    if n == 0 || sum_c == 0.0 { f64::INFINITY } else { sum_e / sum_c }
+    if n == 0 || sum_c == 0.0 {
+        f64::INFINITY
+    } else {
+        sum_e / sum_c
+    }
 }
 
 fn progress_bar(total: Option<u64>) -> ProgressBar {
@@ -79,18 +87,28 @@ fn progress_bar(total: Option<u64>) -> ProgressBar {
 }
 
 fn options(args: &ReferenceArgs, photons: u64) -> ReferenceOptions {
-    ReferenceOptions { photons, batches: args.batches, seed: args.seed, direct: args.direct }
+    ReferenceOptions {
+        photons,
+        batches: args.batches,
+        seed: args.seed,
+        direct: args.direct,
+    }
 }
 
 fn validate(args: &ReferenceArgs) -> Result<()> {
     match (args.photons, args.time) {
         (None, None) if !args.bench => bail!("give --photons N or --time SECONDS"),
         (Some(0), _) => bail!("--photons: expected a positive integer, got 0"),
-        (_, Some(t)) if !(t.is_finite() && t > 0.0) => bail!("--time: expected a positive number of seconds, got {t}"),
+        (_, Some(t)) if !(t.is_finite() && t > 0.0) => {
+            bail!("--time: expected a positive number of seconds, got {t}")
+        }
         _ => {}
     }
     if args.batches < 2 {
-        bail!("--batches: expected at least 2 (the standard error needs independent batches), got {}", args.batches);
+        bail!(
+            "--batches: expected at least 2 (the standard error needs independent batches), got {}",
+            args.batches
+        );
     }
     Ok(())
 }
@@ -131,7 +149,12 @@ pub fn reference(args: &ReferenceArgs) -> Result<()> {
     Ok(())
 }
 
-fn write(dir: &std::path::Path, scene: &Scene, args: &ReferenceArgs, r: &ReferenceResult) -> Result<()> {
+fn write(
+    dir: &std::path::Path,
+    scene: &Scene,
+    args: &ReferenceArgs,
+    r: &ReferenceResult,
+) -> Result<()> {
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     let exr = |name: &str, img: &ReferenceImage| -> Result<()> {
         caustics_metrics::write_exr(&dir.join(name), &to_hdr(img))?;
@@ -168,14 +191,21 @@ fn write(dir: &std::path::Path, scene: &Scene, args: &ReferenceArgs, r: &Referen
 /// Photons/s of the reference on the scenes the issue names.
 fn bench(args: &ReferenceArgs) -> Result<()> {
     let photons = args.photons.unwrap_or(4_000_000);
-    println!("{:<20} {:>12} {:>10} {:>14}", "scene", "photons", "seconds", "M photons/s");
+    println!(
+        "{:<20} {:>12} {:>10} {:>14}",
+        "scene", "photons", "seconds", "M photons/s"
+    );
     for name in ["sphere_on_plane", "ring", "water_pool"] {
         let scene = Scene::load(&caustics_scene::resolve(name)?)?;
         let tracer = Reference::new(&scene)?;
         let start = Instant::now();
         let r = tracer.render(&options(args, photons), &|_| {})?;
         let s = start.elapsed().as_secs_f64();
-        println!("{name:<20} {:>12} {s:>10.2} {:>14.3}", r.photons, r.photons as f64 / s / 1e6);
+        println!(
+            "{name:<20} {:>12} {s:>10.2} {:>14.3}",
+            r.photons,
+            r.photons as f64 / s / 1e6
+        );
     }
     Ok(())
 }

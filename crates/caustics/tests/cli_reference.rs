@@ -1,0 +1,127 @@
+//! `caustics reference` end to end: bad options fail clearly; a rendered reference
+//! lands in the cache, and `caustics run` then scores against it on its own.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn caustics(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_caustics"))
+        .args(args)
+        .output()
+        .expect("run caustics")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn small_scene(dir: &Path, name: &str, width: u32, height: u32) -> String {
+    let src = caustics_scene::resolve(name).expect("built-in");
+    let mut json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(src).expect("read")).expect("json");
+    json["camera"]["width"] = width.into();
+    json["camera"]["height"] = height.into();
+    let path = dir.join(format!("{name}.json"));
+    std::fs::write(&path, json.to_string()).expect("write");
+    path.display().to_string()
+}
+
+#[test]
+fn bad_reference_options_fail_clearly() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let refs = tmp.path().to_str().expect("utf-8");
+    for (args, needle) in [
+        (vec!["--scene", "ring"], "--photons N or --time SECONDS"),
+        (vec!["--scene", "ring", "--photons", "0"], "--photons"),
+        (vec!["--scene", "ring", "--time=-3"], "--time"),
+        (
+            vec!["--scene", "ring", "--photons", "10", "--batches", "1"],
+            "--batches",
+        ),
+        (
+            vec!["--scene", "no_such_scene", "--photons", "10"],
+            "no_such_scene",
+        ),
+        (
+            vec!["--scene", "ring", "--photons", "10", "--time", "1"],
+            "cannot be used with",
+        ),
+    ] {
+        let mut all = vec!["reference", "--references", refs];
+        all.extend(args.iter());
+        let o = caustics(&all);
+        assert!(!o.status.success(), "{args:?} succeeded");
+        assert!(stderr(&o).contains(needle), "{args:?}: {}", stderr(&o));
+    }
+    assert!(
+        std::fs::read_dir(tmp.path())
+            .expect("read_dir")
+            .next()
+            .is_none(),
+        "nothing may be written"
+    );
+}
+
+#[test]
+fn a_rendered_reference_is_cached_and_used_by_run() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let scene = small_scene(tmp.path(), "water_pool", 64, 48);
+    let refs = tmp.path().join("refs");
+    let refs_s = refs.to_str().expect("utf-8");
+    let o = caustics(&[
+        "reference",
+        "--scene",
+        &scene,
+        "--photons",
+        "200000",
+        "--references",
+        refs_s,
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let loaded = caustics_scene::Scene::load(Path::new(&scene)).expect("scene");
+    let dir = caustics::references::cache_dir(&refs, &loaded);
+    for f in ["caustic.exr", "stderr.exr", "meta.json"] {
+        assert!(dir.join(f).is_file(), "{f} missing in {}", dir.display());
+    }
+    let meta = caustics::references::find(&refs, &loaded)
+        .expect("valid cache")
+        .expect("found");
+    assert!(meta.meta.photons >= 200_000);
+    assert!(meta.meta.relative_stderr > 0.0 && meta.meta.relative_stderr.is_finite());
+
+    let out = tmp.path().join("out");
+    let o = caustics(&[
+        "run",
+        "--scene",
+        &scene,
+        "--method",
+        "wavefront",
+        "--frames",
+        "1",
+        "--warmup",
+        "0",
+        "--references",
+        refs_s,
+        "--out",
+        out.to_str().expect("utf-8"),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("using cached reference"),
+        "{}",
+        stderr(&o)
+    );
+    let result: serde_json::Value = serde_json::from_slice(
+        &std::fs::read(out.join("water_pool").join("wavefront").join("result.json"))
+            .expect("result.json"),
+    )
+    .expect("json");
+    assert_eq!(result["errors"]["reference_source"], "cache");
+    assert!(result["errors"]["surface"]["rmse"].as_f64().expect("rmse") > 0.0);
+    assert!(
+        out.join("water_pool")
+            .join("wavefront")
+            .join("error.png")
+            .is_file()
+    );
+}
