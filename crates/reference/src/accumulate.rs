@@ -53,16 +53,68 @@ impl Plan {
     }
 }
 
+/// Pixels per tile of a batch image (row-major runs of the image).
+const TILE: usize = 256;
+/// No tile stored.
+const NO_TILE: u32 = u32::MAX;
+
+/// One batch's sums, stored sparsely: only tiles of [`TILE`] pixels that received a
+/// splat hold memory (caustics cover a small part of most images, and a dense
+/// `f64` image per batch made allocating, zeroing and reducing them a large fixed
+/// cost of every render). A missing tile reads as zeros, so the sums are exactly
+/// those of a dense image.
+struct Sparse {
+    /// Per tile: its index in `data`, or [`NO_TILE`].
+    tiles: Vec<u32>,
+    /// Stored tiles, `3 · TILE` sums each.
+    data: Vec<f64>,
+}
+
+impl Sparse {
+    fn new(pixels: usize) -> Sparse {
+        Sparse {
+            tiles: vec![NO_TILE; pixels.div_ceil(TILE)],
+            data: Vec::new(),
+        }
+    }
+
+    /// The sums of tile `t`, if stored.
+    #[inline]
+    fn tile(&self, t: usize) -> Option<&[f64]> {
+        let k = self.tiles[t];
+        (k != NO_TILE).then(|| &self.data[k as usize * 3 * TILE..(k as usize + 1) * 3 * TILE])
+    }
+
+    fn add_splats(&mut self, splats: &[Splat]) {
+        for s in splats {
+            let p = s.pixel as usize;
+            let Some(slot) = self.tiles.get_mut(p / TILE) else {
+                continue;
+            };
+            if *slot == NO_TILE {
+                *slot = (self.data.len() / (3 * TILE)) as u32;
+                self.data.resize(self.data.len() + 3 * TILE, 0.0);
+            }
+            let i = *slot as usize * 3 * TILE + 3 * (p % TILE);
+            let px = &mut self.data[i..i + 3];
+            for (acc, v) in px.iter_mut().zip(s.rgb) {
+                *acc += v as f64;
+            }
+        }
+    }
+}
+
 /// Per-batch sums of one image kind.
 pub(crate) struct Batched {
-    /// B images of `3 · pixels` sums.
-    sums: Vec<Vec<f64>>,
+    sums: Vec<Sparse>,
+    pixels: usize,
 }
 
 impl Batched {
     pub(crate) fn new(batches: u32, pixels: usize) -> Batched {
         Batched {
-            sums: (0..batches).map(|_| vec![0.0; 3 * pixels]).collect(),
+            sums: (0..batches).map(|_| Sparse::new(pixels)).collect(),
+            pixels,
         }
     }
 
@@ -72,7 +124,7 @@ impl Batched {
         self.sums.par_iter_mut().enumerate().for_each(|(b, img)| {
             for (i, out) in outs.iter().enumerate() {
                 if (first + i as u64) % b_count == b as u64 {
-                    add_splats(img, pick(out));
+                    img.add_splats(pick(out));
                 }
             }
         });
@@ -81,23 +133,53 @@ impl Batched {
     /// The mean image and its standard error, for `per_batch` photons per batch.
     pub(crate) fn finish(&self, per_batch: u64) -> (Vec<[f32; 3]>, Vec<[f32; 3]>) {
         let b = self.sums.len();
-        let pixels = self.sums.first().map_or(0, |s| s.len() / 3);
         let scale = 1.0 / per_batch as f64;
-        (0..pixels)
-            .into_par_iter()
-            .map(|p| {
-                let mut mean = [0f32; 3];
-                let mut err = [0f32; 3];
-                for c in 0..3 {
-                    let x = |k: usize| self.sums[k][3 * p + c] * scale;
-                    let m = (0..b).map(x).sum::<f64>() / b as f64;
-                    let var = (0..b).map(|k| (x(k) - m).powi(2)).sum::<f64>();
-                    mean[c] = m as f32;
-                    err[c] = (var / (b as f64 * (b as f64 - 1.0))).sqrt() as f32;
+        let mut mean = vec![[0f32; 3]; self.pixels];
+        let mut err = vec![[0f32; 3]; self.pixels];
+        mean.par_chunks_mut(TILE)
+            .zip(err.par_chunks_mut(TILE))
+            .enumerate()
+            .for_each(|(t, (mean, err))| {
+                let tiles: Vec<Option<&[f64]>> = self.sums.iter().map(|s| s.tile(t)).collect();
+                if tiles.iter().all(Option::is_none) {
+                    return;
                 }
-                (mean, err)
-            })
-            .unzip()
+                // Missing tiles are zeros: the same sums, in the same batch order, as
+                // a dense image (x + 0 = x for the non-negative sums).
+                let n = 3 * mean.len();
+                let mut m = [0f64; 3 * TILE];
+                for s in tiles.iter().flatten() {
+                    for (m, v) in m[..n].iter_mut().zip(&s[..n]) {
+                        *m += v * scale;
+                    }
+                }
+                for m in &mut m[..n] {
+                    *m /= b as f64;
+                }
+                let mut var = [0f64; 3 * TILE];
+                for s in &tiles {
+                    match s {
+                        Some(s) => {
+                            for ((acc, v), m) in var[..n].iter_mut().zip(&s[..n]).zip(&m[..n]) {
+                                *acc += (v * scale - m) * (v * scale - m);
+                            }
+                        }
+                        None => {
+                            for (acc, m) in var[..n].iter_mut().zip(&m[..n]) {
+                                *acc += m * m;
+                            }
+                        }
+                    }
+                }
+                let norm = b as f64 * (b as f64 - 1.0);
+                for (p, (mean, err)) in mean.iter_mut().zip(err.iter_mut()).enumerate() {
+                    for c in 0..3 {
+                        mean[c] = m[3 * p + c] as f32;
+                        err[c] = (var[3 * p + c] / norm).sqrt() as f32;
+                    }
+                }
+            });
+        (mean, err)
     }
 }
 

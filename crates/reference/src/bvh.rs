@@ -1,19 +1,17 @@
-//! Triangle objects (heightfields and meshes) in one BVH.
+//! Mesh objects in one BVH (heightfields have their own grid, [`crate::heightfield`]).
 //!
 //! The BVH is [`obvhs`]'s compressed wide BVH8 (CWBVH, Ylitie et al. 2017) built with
 //! PLOC: a maintained crate, on glam like the rest of the workspace (obvhs 0.3 takes
 //! glam 0.30, so no second glam is built), with SIMD node tests and no heavy math
-//! dependency (the `bvh` crate pulls in nalgebra). Only triangle objects go in it;
-//! analytic shapes are intersected exactly in [`crate::geometry`].
+//! dependency (the `bvh` crate pulls in nalgebra). Only meshes go in it; analytic
+//! shapes are intersected exactly in [`crate::geometry`].
 //!
-//! Normals follow DESIGN.md "Conventions": heightfield hits take the analytic
-//! [`Heightfield::normal`] at the hit's (x, z), positions come from the same
-//! tessellation as the GPU methods; mesh hits interpolate the vertex normals with the
-//! hit's barycentrics (smooth shading, never flat facets).
+//! Normals follow DESIGN.md "Conventions": mesh hits interpolate the vertex normals
+//! with the hit's barycentrics (smooth shading, never flat facets).
 
 use std::time::Duration;
 
-use caustics_scene::{Heightfield, Scene, Shape, Tessellation, Vec3};
+use caustics_scene::{Scene, Shape, Tessellation, Vec3};
 use obvhs::{
     BvhBuildParams,
     cwbvh::{CwBvh, builder::build_cwbvh_from_tris},
@@ -24,42 +22,28 @@ use obvhs::{
 use crate::eps;
 use crate::geometry::Hit;
 
-/// Where a triangle's shading normal comes from.
-enum Normals {
-    /// The analytic normal of this heightfield.
-    Heightfield(Heightfield),
-    /// Interpolated vertex normals (stored per triangle).
-    Vertex,
-}
-
-/// All triangle objects of a scene with their BVH.
+/// All mesh objects of a scene with their BVH.
 pub(crate) struct Triangles {
     bvh: CwBvh,
     /// Triangles in BVH primitive order.
     tris: Vec<Triangle>,
-    /// Per triangle (BVH order): object index and index into `sources`.
-    owner: Vec<(u32, u32)>,
-    /// Per triangle (BVH order): vertex normals (unused for heightfields).
+    /// Per triangle (BVH order): object index.
+    owner: Vec<u32>,
+    /// Per triangle (BVH order): vertex normals.
     normals: Vec<[Vec3; 3]>,
-    sources: Vec<Normals>,
 }
 
 impl Triangles {
-    /// The triangle objects of `scene`, or `None` if it has none.
+    /// The mesh objects of `scene`, or `None` if it has none.
     pub(crate) fn new(scene: &Scene) -> Option<Triangles> {
         let mut tris = Vec::new();
         let mut owner = Vec::new();
         let mut normals = Vec::new();
-        let mut sources = Vec::new();
         for (i, o) in scene.objects.iter().enumerate() {
-            let source = match &o.shape {
-                Shape::Heightfield(h) => Normals::Heightfield(h.clone()),
-                Shape::Mesh(_) => Normals::Vertex,
-                _ => continue,
-            };
+            if !matches!(o.shape, Shape::Mesh(_)) {
+                continue;
+            }
             let mesh = o.shape.triangulate(&Tessellation::default());
-            let s = sources.len() as u32;
-            sources.push(source);
             for t in 0..mesh.triangle_count() {
                 let idx = &mesh.indices[3 * t..3 * t + 3];
                 let [a, b, c] = mesh.triangle(t);
@@ -68,7 +52,7 @@ impl Triangles {
                     v1: b.into(),
                     v2: c.into(),
                 });
-                owner.push((i as u32, s));
+                owner.push(i as u32);
                 normals.push([
                     mesh.normals[idx[0] as usize],
                     mesh.normals[idx[1] as usize],
@@ -94,7 +78,6 @@ impl Triangles {
             tris: tris_o,
             owner: owner_o,
             normals: normals_o,
-            sources,
         })
     }
 
@@ -115,15 +98,10 @@ impl Triangles {
         let p = o + t * d;
         let (v0, v1, v2) = (Vec3::from(tri.v0), Vec3::from(tri.v1), Vec3::from(tri.v2));
         let ng = (v1 - v0).cross(v2 - v0).normalize();
-        let (object, source) = self.owner[k];
-        let ns = match &self.sources[source as usize] {
-            Normals::Heightfield(h) => h.normal(p.x, p.z),
-            Normals::Vertex => {
-                let [b0, b1, b2] = barycentric(p, v0, v1, v2);
-                let [n0, n1, n2] = self.normals[k];
-                (b0 * n0 + b1 * n1 + b2 * n2).normalize_or(ng)
-            }
-        };
+        let object = self.owner[k];
+        let [b0, b1, b2] = barycentric(p, v0, v1, v2);
+        let [n0, n1, n2] = self.normals[k];
+        let ns = (b0 * n0 + b1 * n1 + b2 * n2).normalize_or(ng);
         let ns = if ns.dot(ng) < 0.0 { -ns } else { ns };
         Some(Hit {
             t,

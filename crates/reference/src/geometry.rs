@@ -1,10 +1,12 @@
 //! Analytic primitives (sphere, quad, open cylinder) and the scene's intersector,
-//! which adds the triangle objects of [`crate::bvh`]. Epsilons: [`crate::eps`].
+//! which adds the heightfields of [`crate::heightfield`] and the meshes of
+//! [`crate::bvh`]. Epsilons: [`crate::eps`].
 
 use caustics_scene::{Scene, Shape, Vec3, quad_axes};
 
 use crate::bvh::Triangles;
 use crate::eps;
+use crate::heightfield::HeightGrid;
 
 /// A surface hit.
 #[derive(Clone, Copy, Debug)]
@@ -45,10 +47,11 @@ enum Analytic {
     },
 }
 
-/// The scene's geometry: analytic primitives tested one by one (there are few), and
-/// triangle objects (heightfields, meshes) in one BVH.
+/// The scene's geometry: analytic primitives tested one by one (there are few),
+/// heightfields on their own grids, and meshes in one BVH.
 pub(crate) struct Geometry {
     analytic: Vec<(Analytic, u32)>,
+    heightfields: Vec<HeightGrid>,
     triangles: Option<Triangles>,
 }
 
@@ -56,6 +59,7 @@ impl Geometry {
     /// Builds the intersector of `scene`.
     pub(crate) fn new(scene: &Scene) -> Geometry {
         let mut analytic = Vec::new();
+        let mut heightfields = Vec::new();
         for (i, o) in scene.objects.iter().enumerate() {
             let prim = match &o.shape {
                 Shape::Sphere { center, radius } => Analytic::Sphere {
@@ -87,12 +91,17 @@ impl Geometry {
                     radius: *radius,
                     half_height: 0.5 * height,
                 },
-                Shape::Heightfield(_) | Shape::Mesh(_) => continue,
+                Shape::Heightfield(_) => {
+                    heightfields.extend(HeightGrid::new(&o.shape, i as u32));
+                    continue;
+                }
+                Shape::Mesh(_) => continue,
             };
             analytic.push((prim, i as u32));
         }
         Geometry {
             analytic,
+            heightfields,
             triangles: Triangles::new(scene),
         }
     }
@@ -100,20 +109,30 @@ impl Geometry {
     /// The closest hit with `eps::T_MIN < t < t_max` along the unit direction `d`.
     #[inline]
     pub(crate) fn intersect(&self, o: Vec3, d: Vec3, t_max: f32) -> Option<Hit> {
-        let mut best: Option<Hit> = None;
+        let mut best: Option<usize> = None;
         let mut t_best = t_max;
-        for (prim, obj) in &self.analytic {
-            if let Some(h) = prim.intersect(o, d, t_best, *obj) {
+        for (k, (prim, _)) in self.analytic.iter().enumerate() {
+            if let Some(t) = prim.distance(o, d, t_best) {
+                t_best = t;
+                best = Some(k);
+            }
+        }
+        let mut hit = best.map(|k| {
+            let (prim, obj) = &self.analytic[k];
+            prim.hit_at(o, d, t_best, *obj)
+        });
+        for grid in &self.heightfields {
+            if let Some(h) = grid.intersect(o, d, t_best) {
                 t_best = h.t;
-                best = Some(h);
+                hit = Some(h);
             }
         }
         if let Some(tris) = &self.triangles
             && let Some(h) = tris.intersect(o, d, t_best)
         {
-            best = Some(h);
+            return Some(h);
         }
-        best
+        hit
     }
 
     /// True if anything lies on the segment `eps::T_MIN < t < t_max` along `d`.
@@ -121,7 +140,8 @@ impl Geometry {
     pub(crate) fn occluded(&self, o: Vec3, d: Vec3, t_max: f32) -> bool {
         self.analytic
             .iter()
-            .any(|(prim, obj)| prim.intersect(o, d, t_max, *obj).is_some())
+            .any(|(prim, _)| prim.distance(o, d, t_max).is_some())
+            || self.heightfields.iter().any(|g| g.occluded(o, d, t_max))
             || self
                 .triangles
                 .as_ref()
@@ -130,8 +150,9 @@ impl Geometry {
 }
 
 impl Analytic {
+    /// The distance to the closest hit with `eps::T_MIN < t < t_max`.
     #[inline]
-    fn intersect(&self, o: Vec3, d: Vec3, t_max: f32, object: u32) -> Option<Hit> {
+    fn distance(&self, o: Vec3, d: Vec3, t_max: f32) -> Option<f32> {
         match *self {
             Analytic::Sphere { center, radius } => {
                 // Closest-point form: the roots are t_c ± h with |f| computed exactly.
@@ -143,16 +164,7 @@ impl Analytic {
                     return None;
                 }
                 let h = disc.sqrt();
-                let t = first_root(tc - h, tc + h, t_max)?;
-                let p = o + t * d;
-                let n = ((p - center) / radius).normalize();
-                Some(Hit {
-                    t,
-                    p,
-                    ng: n,
-                    ns: n,
-                    object,
-                })
+                first_root(tc - h, tc + h, t_max)
             }
             Analytic::Quad {
                 center,
@@ -174,13 +186,7 @@ impl Analytic {
                 if r.dot(u).abs() > half[0] || r.dot(v).abs() > half[1] {
                     return None;
                 }
-                Some(Hit {
-                    t,
-                    p,
-                    ng: normal,
-                    ns: normal,
-                    object,
-                })
+                Some(t)
             }
             Analytic::Cylinder {
                 center,
@@ -203,20 +209,31 @@ impl Analytic {
                 }
                 let h = (disc / a).sqrt();
                 let in_height = |t: f32| (oc + t * d).dot(axis).abs() <= half_height;
-                let t = [tc - h, tc + h]
+                [tc - h, tc + h]
                     .into_iter()
-                    .find(|&t| t > eps::T_MIN && t < t_max && in_height(t))?;
-                let p = o + t * d;
-                let r = p - center;
-                let n = (r - r.dot(axis) * axis).normalize();
-                Some(Hit {
-                    t,
-                    p,
-                    ng: n,
-                    ns: n,
-                    object,
-                })
+                    .find(|&t| t > eps::T_MIN && t < t_max && in_height(t))
             }
+        }
+    }
+
+    /// The hit at distance `t` (from [`Analytic::distance`]).
+    #[inline]
+    fn hit_at(&self, o: Vec3, d: Vec3, t: f32, object: u32) -> Hit {
+        let p = o + t * d;
+        let n = match *self {
+            Analytic::Sphere { center, radius } => ((p - center) / radius).normalize(),
+            Analytic::Quad { normal, .. } => normal,
+            Analytic::Cylinder { center, axis, .. } => {
+                let r = p - center;
+                (r - r.dot(axis) * axis).normalize()
+            }
+        };
+        Hit {
+            t,
+            p,
+            ng: n,
+            ns: n,
+            object,
         }
     }
 }

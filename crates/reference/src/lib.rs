@@ -48,6 +48,7 @@ mod bvh;
 mod emission;
 pub mod eps;
 mod geometry;
+mod heightfield;
 mod optics;
 mod sensor;
 mod tracer;
