@@ -54,7 +54,9 @@ impl Plan {
 }
 
 /// Pixels per tile of a batch image (row-major runs of the image).
-const TILE: usize = 256;
+const TILE: usize = 16;
+/// Tiles per task of the final reduction.
+const TILES_PER_TASK: usize = 32;
 /// No tile stored.
 const NO_TILE: u32 = u32::MAX;
 
@@ -72,9 +74,12 @@ struct Sparse {
 
 impl Sparse {
     fn new(pixels: usize) -> Sparse {
+        let tiles = pixels.div_ceil(TILE);
         Sparse {
-            tiles: vec![NO_TILE; pixels.div_ceil(TILE)],
-            data: Vec::new(),
+            tiles: vec![NO_TILE; tiles],
+            // Reserved, not touched: pages are mapped only as tiles are stored, and
+            // the buffer never moves.
+            data: Vec::with_capacity(tiles * 3 * TILE),
         }
     }
 
@@ -132,54 +137,62 @@ impl Batched {
 
     /// The mean image and its standard error, for `per_batch` photons per batch.
     pub(crate) fn finish(&self, per_batch: u64) -> (Vec<[f32; 3]>, Vec<[f32; 3]>) {
-        let b = self.sums.len();
         let scale = 1.0 / per_batch as f64;
         let mut mean = vec![[0f32; 3]; self.pixels];
         let mut err = vec![[0f32; 3]; self.pixels];
-        mean.par_chunks_mut(TILE)
-            .zip(err.par_chunks_mut(TILE))
+        let task = TILE * TILES_PER_TASK;
+        mean.par_chunks_mut(task)
+            .zip(err.par_chunks_mut(task))
             .enumerate()
-            .for_each(|(t, (mean, err))| {
-                let tiles: Vec<Option<&[f64]>> = self.sums.iter().map(|s| s.tile(t)).collect();
-                if tiles.iter().all(Option::is_none) {
-                    return;
-                }
-                // Missing tiles are zeros: the same sums, in the same batch order, as
-                // a dense image (x + 0 = x for the non-negative sums).
-                let n = 3 * mean.len();
-                let mut m = [0f64; 3 * TILE];
-                for s in tiles.iter().flatten() {
-                    for (m, v) in m[..n].iter_mut().zip(&s[..n]) {
-                        *m += v * scale;
-                    }
-                }
-                for m in &mut m[..n] {
-                    *m /= b as f64;
-                }
-                let mut var = [0f64; 3 * TILE];
-                for s in &tiles {
-                    match s {
-                        Some(s) => {
-                            for ((acc, v), m) in var[..n].iter_mut().zip(&s[..n]).zip(&m[..n]) {
-                                *acc += (v * scale - m) * (v * scale - m);
-                            }
-                        }
-                        None => {
-                            for (acc, m) in var[..n].iter_mut().zip(&m[..n]) {
-                                *acc += m * m;
-                            }
-                        }
-                    }
-                }
-                let norm = b as f64 * (b as f64 - 1.0);
-                for (p, (mean, err)) in mean.iter_mut().zip(err.iter_mut()).enumerate() {
-                    for c in 0..3 {
-                        mean[c] = m[3 * p + c] as f32;
-                        err[c] = (var[3 * p + c] / norm).sqrt() as f32;
-                    }
+            .for_each(|(k, (mean, err))| {
+                let tiles = mean.chunks_mut(TILE).zip(err.chunks_mut(TILE));
+                for (t, (mean, err)) in tiles.enumerate() {
+                    self.finish_tile(k * TILES_PER_TASK + t, scale, mean, err);
                 }
             });
         (mean, err)
+    }
+
+    /// [`Batched::finish`] for tile `t`.
+    fn finish_tile(&self, t: usize, scale: f64, mean: &mut [[f32; 3]], err: &mut [[f32; 3]]) {
+        let b = self.sums.len();
+        if self.sums.iter().all(|s| s.tile(t).is_none()) {
+            return;
+        }
+        // Missing tiles are zeros: the same sums, in the same batch order, as a
+        // dense image (x + 0 = x for the non-negative sums).
+        let n = 3 * mean.len();
+        let mut m = [0f64; 3 * TILE];
+        for s in self.sums.iter().filter_map(|s| s.tile(t)) {
+            for (m, v) in m[..n].iter_mut().zip(&s[..n]) {
+                *m += v * scale;
+            }
+        }
+        for m in &mut m[..n] {
+            *m /= b as f64;
+        }
+        let mut var = [0f64; 3 * TILE];
+        for s in &self.sums {
+            match s.tile(t) {
+                Some(s) => {
+                    for ((acc, v), m) in var[..n].iter_mut().zip(&s[..n]).zip(&m[..n]) {
+                        *acc += (v * scale - m) * (v * scale - m);
+                    }
+                }
+                None => {
+                    for (acc, m) in var[..n].iter_mut().zip(&m[..n]) {
+                        *acc += m * m;
+                    }
+                }
+            }
+        }
+        let norm = b as f64 * (b as f64 - 1.0);
+        for (p, (mean, err)) in mean.iter_mut().zip(err.iter_mut()).enumerate() {
+            for c in 0..3 {
+                mean[c] = m[3 * p + c] as f32;
+                err[c] = (var[3 * p + c] / norm).sqrt() as f32;
+            }
+        }
     }
 }
 

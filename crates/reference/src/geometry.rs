@@ -151,7 +151,7 @@ impl Geometry {
 
 impl Analytic {
     /// The distance to the closest hit with `eps::T_MIN < t < t_max`.
-    #[inline]
+    #[inline(always)]
     fn distance(&self, o: Vec3, d: Vec3, t_max: f32) -> Option<f32> {
         match *self {
             Analytic::Sphere { center, radius } => {
@@ -217,7 +217,7 @@ impl Analytic {
     }
 
     /// The hit at distance `t` (from [`Analytic::distance`]).
-    #[inline]
+    #[inline(always)]
     fn hit_at(&self, o: Vec3, d: Vec3, t: f32, object: u32) -> Hit {
         let p = o + t * d;
         let n = match *self {
