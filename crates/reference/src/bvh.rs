@@ -11,7 +11,8 @@
 
 use std::time::Duration;
 
-use caustics_scene::{Scene, Shape, Tessellation, Vec3};
+use caustics_scene::{Scene, Shape, Tessellation};
+use glam::Vec3A as Vec3;
 use obvhs::{
     BvhBuildParams,
     cwbvh::{CwBvh, builder::build_cwbvh_from_tris},
@@ -54,9 +55,9 @@ impl Triangles {
                 });
                 owner.push(i as u32);
                 normals.push([
-                    mesh.normals[idx[0] as usize],
-                    mesh.normals[idx[1] as usize],
-                    mesh.normals[idx[2] as usize],
+                    mesh.normals[idx[0] as usize].into(),
+                    mesh.normals[idx[1] as usize].into(),
+                    mesh.normals[idx[2] as usize].into(),
                 ]);
             }
         }
@@ -84,7 +85,7 @@ impl Triangles {
     /// The closest triangle hit with `T_MIN < t < t_max`.
     #[inline]
     pub(crate) fn intersect(&self, o: Vec3, d: Vec3, t_max: f32) -> Option<Hit> {
-        let ray = Ray::new(o.into(), d.into(), eps::T_MIN, t_max);
+        let ray = Ray::new(o, d, eps::T_MIN, t_max);
         let mut hit = RayHit::none();
         if !self
             .bvh
@@ -96,7 +97,7 @@ impl Triangles {
         let t = hit.t;
         let tri = &self.tris[k];
         let p = o + t * d;
-        let (v0, v1, v2) = (Vec3::from(tri.v0), Vec3::from(tri.v1), Vec3::from(tri.v2));
+        let (v0, v1, v2) = (tri.v0, tri.v1, tri.v2);
         let ng = (v1 - v0).cross(v2 - v0).normalize();
         let object = self.owner[k];
         let [b0, b1, b2] = barycentric(p, v0, v1, v2);
@@ -115,7 +116,7 @@ impl Triangles {
     /// True if a triangle lies at `T_MIN < t < t_max`.
     #[inline]
     pub(crate) fn occluded(&self, o: Vec3, d: Vec3, t_max: f32) -> bool {
-        let ray = Ray::new(o.into(), d.into(), eps::T_MIN, t_max);
+        let ray = Ray::new(o, d, eps::T_MIN, t_max);
         !self
             .bvh
             .ray_traverse_miss(ray, |r, id| self.tris[id].intersect(r))

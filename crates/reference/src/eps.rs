@@ -49,5 +49,16 @@ pub fn offset_point(p: glam::Vec3, ng: glam::Vec3, dir: glam::Vec3) -> glam::Vec
     }
 }
 
+/// [`offset_point`] for SIMD vectors.
+#[inline]
+pub(crate) fn offset_point_a(p: glam::Vec3A, ng: glam::Vec3A, dir: glam::Vec3A) -> glam::Vec3A {
+    let o = RAY_OFFSET * (1.0 + p.abs().max_element());
+    if ng.dot(dir) >= 0.0 {
+        p + o * ng
+    } else {
+        p - o * ng
+    }
+}
+
 /// The same policy as one string, for logs and result files.
 pub const EPSILON_POLICY: &str = "f32 geometry; ray origins offset along the geometric normal by 2e-5*(1+max|p|) m to the outgoing side; t_min 1e-6 m; eye connections shortened by 1e-4 relative; robust closest-point quadrics; f64 per-batch accumulation";

@@ -2,7 +2,8 @@
 //! which adds the heightfields of [`crate::heightfield`] and the meshes of
 //! [`crate::bvh`]. Epsilons: [`crate::eps`].
 
-use caustics_scene::{Scene, Shape, Vec3, quad_axes};
+use caustics_scene::{Scene, Shape, quad_axes};
+use glam::Vec3A as Vec3;
 
 use crate::bvh::Triangles;
 use crate::eps;
@@ -63,7 +64,7 @@ impl Geometry {
         for (i, o) in scene.objects.iter().enumerate() {
             let prim = match &o.shape {
                 Shape::Sphere { center, radius } => Analytic::Sphere {
-                    center: *center,
+                    center: (*center).into(),
                     radius: *radius,
                 },
                 Shape::Quad {
@@ -73,10 +74,10 @@ impl Geometry {
                 } => {
                     let (u, v) = quad_axes(*normal);
                     Analytic::Quad {
-                        center: *center,
-                        normal: *normal,
-                        u,
-                        v,
+                        center: (*center).into(),
+                        normal: (*normal).into(),
+                        u: u.into(),
+                        v: v.into(),
                         half: [0.5 * size.x, 0.5 * size.y],
                     }
                 }
@@ -86,8 +87,8 @@ impl Geometry {
                     radius,
                     height,
                 } => Analytic::Cylinder {
-                    center: *center,
-                    axis: *axis,
+                    center: (*center).into(),
+                    axis: (*axis).into(),
                     radius: *radius,
                     half_height: 0.5 * height,
                 },
@@ -221,7 +222,7 @@ impl Analytic {
     fn hit_at(&self, o: Vec3, d: Vec3, t: f32, object: u32) -> Hit {
         let p = o + t * d;
         let n = match *self {
-            Analytic::Sphere { center, radius } => ((p - center) / radius).normalize(),
+            Analytic::Sphere { center, .. } => (p - center).normalize(),
             Analytic::Quad { normal, .. } => normal,
             Analytic::Cylinder { center, axis, .. } => {
                 let r = p - center;

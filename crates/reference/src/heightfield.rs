@@ -10,8 +10,8 @@
 //! along the ray. Normals follow DESIGN.md "Conventions": the analytic
 //! [`Heightfield::normal`] at the hit's (x, z), turned to the facet's side.
 
-use caustics_scene::{Heightfield, Shape, Tessellation, Vec3};
-use glam::Vec3A;
+use caustics_scene::{Heightfield, Shape, Tessellation};
+use glam::{Vec3A, Vec3A as Vec3};
 use obvhs::{ray::Ray, triangle::Triangle};
 
 use crate::eps;
@@ -46,8 +46,8 @@ impl HeightGrid {
         let vertices: Vec<Vec3A> = mesh.positions.iter().map(|&p| p.into()).collect();
         let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
         for p in &mesh.positions {
-            lo = lo.min(*p);
-            hi = hi.max(*p);
+            lo = lo.min((*p).into());
+            hi = hi.max((*p).into());
         }
         let margin = 1e-5 * (1.0 + lo.abs().max(hi.abs()).max_element());
         let cells = [nx - 1, nz - 1];
@@ -125,7 +125,7 @@ impl HeightGrid {
     #[inline]
     fn first(&self, o: Vec3, d: Vec3, t_max: f32) -> Option<(f32, usize, usize, usize)> {
         let (t0, t1) = self.clip(o, d, t_max)?;
-        let ray = Ray::new(o.into(), d.into(), eps::T_MIN, t_max);
+        let ray = Ray::new(o, d, eps::T_MIN, t_max);
         let [cx, cz] = self.cells;
         let p = o + t0 * d;
         let cell = |c: f32, origin: f32, step: f32, n: usize| {
@@ -188,9 +188,9 @@ impl HeightGrid {
         let (t, i, j, which) = self.first(o, d, t_max)?;
         let tri = self.triangles(i, j)[which];
         let p = o + t * d;
-        let (v0, v1, v2) = (Vec3::from(tri.v0), Vec3::from(tri.v1), Vec3::from(tri.v2));
+        let (v0, v1, v2) = (tri.v0, tri.v1, tri.v2);
         let ng = (v1 - v0).cross(v2 - v0).normalize();
-        let ns = self.field.normal(p.x, p.z);
+        let ns = Vec3::from(self.field.normal(p.x, p.z));
         let ns = if ns.dot(ng) < 0.0 { -ns } else { ns };
         Some(Hit {
             t,

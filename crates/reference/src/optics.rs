@@ -1,7 +1,7 @@
 //! Specular optics and the phase function: exact unpolarized Fresnel, Snell,
 //! mirror reflection, Henyey–Greenstein.
 
-use glam::Vec3;
+use glam::Vec3A as Vec3;
 
 /// Reflects `d` (pointing toward the surface) about the unit normal `n`.
 #[inline]
@@ -21,9 +21,16 @@ pub(crate) fn fresnel(cos_i: f32, n1: f32, n2: f32) -> (f32, f32) {
         return (1.0, 0.0);
     }
     let cos_t = (1.0 - sin2_t).sqrt();
-    let rs = (n1 * cos_i - n2 * cos_t) / (n1 * cos_i + n2 * cos_t);
-    let rp = (n2 * cos_i - n1 * cos_t) / (n2 * cos_i + n1 * cos_t);
-    (0.5 * (rs * rs + rp * rp), cos_t)
+    // rs = (a − b)/(a + b), rp = (c − e)/(c + e), over one division.
+    let (a, b) = (n1 * cos_i, n2 * cos_t);
+    let (c, e) = (n2 * cos_i, n1 * cos_t);
+    let (sa, sc) = ((a - b) * (c + e), (c - e) * (a + b));
+    let den = (a + b) * (c + e);
+    if den <= 0.0 {
+        // Grazing incidence (cos_i = 0): everything is reflected.
+        return (1.0, cos_t);
+    }
+    (0.5 * (sa * sa + sc * sc) / (den * den), cos_t)
 }
 
 /// Refracts the unit direction `d` through a surface with unit normal `n` facing the

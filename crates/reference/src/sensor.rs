@@ -31,7 +31,8 @@
 //! because ∫ cos θ_x / (cos³θ_c d²) dA over a pixel's footprint is A_pix.
 //! [`Sensor::project`] returns the factor 1/(A_pix·cos³θ_c·d²).
 
-use caustics_scene::{Camera, Vec3};
+use caustics_scene::Camera;
+use glam::Vec3A as Vec3;
 
 use crate::eps;
 
@@ -69,10 +70,10 @@ impl Sensor {
         let tan_half = (0.5 * camera.fov_y_rad()).tan();
         let s = 2.0 * tan_half / camera.height as f32;
         Sensor {
-            eye: camera.eye,
-            forward: camera.forward(),
-            right: camera.right(),
-            up: camera.image_up(),
+            eye: camera.eye.into(),
+            forward: camera.forward().into(),
+            right: camera.right().into(),
+            up: camera.image_up().into(),
             scale_x: 1.0 / (tan_half * camera.aspect()),
             scale_y: 1.0 / tan_half,
             inv_pixel_area: 1.0 / (s * s),
@@ -94,8 +95,9 @@ impl Sensor {
         if z <= 0.0 {
             return None;
         }
-        let ndc_x = v.dot(self.right) / z * self.scale_x;
-        let ndc_y = v.dot(self.up) / z * self.scale_y;
+        let inv_z = 1.0 / z;
+        let ndc_x = v.dot(self.right) * inv_z * self.scale_x;
+        let ndc_y = v.dot(self.up) * inv_z * self.scale_y;
         let px = 0.5 * (ndc_x + 1.0) * self.width as f32;
         let py = 0.5 * (1.0 - ndc_y) * self.height as f32;
         if !(px >= 0.0 && py >= 0.0 && px < self.width as f32 && py < self.height as f32) {
@@ -105,17 +107,18 @@ impl Sensor {
             (px as u32).min(self.width - 1),
             (py as u32).min(self.height - 1),
         );
-        let d2 = v.length_squared();
-        let dist = d2.sqrt();
-        let cos_c = z / dist;
+        let dist = v.length();
+        let inv_dist = 1.0 / dist;
+        let cos_c = z * inv_dist;
         if cos_c < eps::MIN_COS {
             return None;
         }
         Some(Projection {
             pixel: j * self.width + i,
             dist,
-            to_eye: -v / dist,
-            importance: self.inv_pixel_area / (cos_c * cos_c * cos_c * d2),
+            to_eye: -v * inv_dist,
+            // 1 / (A_pix · cos³θ_c · d²) with cos θ_c = z / d.
+            importance: self.inv_pixel_area * dist * (inv_z * inv_z * inv_z),
         })
     }
 }
@@ -123,12 +126,13 @@ impl Sensor {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glam::Vec3 as SceneVec3;
 
     fn camera() -> Camera {
         Camera {
-            eye: Vec3::new(0.3, 2.0, 3.0),
-            target: Vec3::new(0.0, 0.0, 0.0),
-            up: Vec3::Y,
+            eye: SceneVec3::new(0.3, 2.0, 3.0),
+            target: SceneVec3::new(0.0, 0.0, 0.0),
+            up: SceneVec3::Y,
             fov_y_deg: 50.0,
             width: 64,
             height: 48,
@@ -141,7 +145,7 @@ mod tests {
         let s = Sensor::new(&cam);
         for (i, j) in [(0u32, 0u32), (10, 40), (63, 47), (31, 24)] {
             let (o, d) = cam.ray_through_pixel(i as f32 + 0.5, j as f32 + 0.5);
-            let p = s.project(o + 2.5 * d).expect("in view");
+            let p = s.project((o + 2.5 * d).into()).expect("in view");
             assert_eq!(p.pixel, j * cam.width + i);
             assert!((p.dist - 2.5).abs() < 1e-4);
         }
@@ -152,9 +156,9 @@ mod tests {
     #[test]
     fn importance_integrates_to_one_per_pixel() {
         let cam = Camera {
-            eye: Vec3::new(0.0, 5.0, 0.0),
-            target: Vec3::ZERO,
-            up: Vec3::Z,
+            eye: SceneVec3::new(0.0, 5.0, 0.0),
+            target: SceneVec3::ZERO,
+            up: SceneVec3::Z,
             fov_y_deg: 60.0,
             width: 8,
             height: 6,

@@ -19,7 +19,8 @@
 //! (ℓ = ∞ for photons leaving the scene), and connected to the eye with the
 //! Henyey–Greenstein phase function; the RGB weight T(s)·σs / p(s) keeps it unbiased.
 
-use caustics_scene::{Material, Medium, Vec3};
+use caustics_scene::{Material, Medium};
+use glam::Vec3A as Vec3;
 use rand_xoshiro::Xoshiro256PlusPlus;
 use rand_xoshiro::rand_core::{Rng, SeedableRng};
 
@@ -52,7 +53,7 @@ pub(crate) struct UnitOutput {
 }
 
 /// A filter on (object index, point) for the power hook.
-pub(crate) type PowerFilter<'a> = &'a (dyn Fn(usize, Vec3) -> bool + Sync);
+pub(crate) type PowerFilter<'a> = &'a (dyn Fn(usize, glam::Vec3) -> bool + Sync);
 
 /// Everything a unit needs, borrowed from the [`crate::Reference`].
 pub(crate) struct Tracer<'a> {
@@ -125,7 +126,11 @@ impl Tracer<'_> {
     fn trace(&self, emitter: &Emitter, caustic: bool, rng: &mut UnitRng, out: &mut UnitOutput) {
         let u = [rng.next(), rng.next(), rng.next(), rng.next()];
         let photon = emitter.sample(u);
-        let (mut o, mut d, mut power) = (photon.origin, photon.dir, photon.power);
+        let (mut o, mut d, mut power) = (
+            Vec3::from(photon.origin),
+            Vec3::from(photon.dir),
+            Vec3::from(photon.power),
+        );
         if power.max_element() <= 0.0 {
             return;
         }
@@ -143,20 +148,20 @@ impl Tracer<'_> {
                     }
                 }
                 if hit.is_some() {
-                    power *= exp3(-m.sigma_t() * len);
+                    power *= exp3(-Vec3::from(m.sigma_t()) * len);
                 }
             }
             let Some(hit) = hit else { return };
             match &self.materials[hit.object as usize] {
                 Material::Diffuse { albedo } => {
                     if caustic == (specular > 0) {
-                        self.land(&hit, d, power, *albedo, caustic, out);
+                        self.land(&hit, d, power, (*albedo).into(), caustic, out);
                     }
                     return;
                 }
                 _ if !caustic || specular >= MAX_SPECULAR => return,
                 Material::Mirror { reflectance } => {
-                    power *= *reflectance;
+                    power *= Vec3::from(*reflectance);
                     let r = reflect(d, hit.ns);
                     if r.dot(hit.ng) * d.dot(hit.ng) >= 0.0 {
                         return;
@@ -186,7 +191,7 @@ impl Tracer<'_> {
                 return;
             }
             specular += 1;
-            o = eps::offset_point(hit.p, hit.ng, d);
+            o = eps::offset_point_a(hit.p, hit.ng, d);
         }
     }
 
@@ -203,7 +208,7 @@ impl Tracer<'_> {
     ) {
         if caustic
             && let Some(filter) = self.power_filter
-            && filter(hit.object as usize, hit.p)
+            && filter(hit.object as usize, hit.p.into())
         {
             for (acc, v) in out.power.iter_mut().zip(power.to_array()) {
                 *acc += v as f64;
@@ -220,7 +225,7 @@ impl Tracer<'_> {
         if cos_x * d.dot(hit.ng) >= 0.0 || cos_x.abs() < eps::MIN_COS {
             return;
         }
-        let origin = eps::offset_point(hit.p, hit.ng, proj.to_eye);
+        let origin = eps::offset_point_a(hit.p, hit.ng, proj.to_eye);
         let dist = (self.sensor.eye - origin).length();
         if self
             .geometry
@@ -230,7 +235,7 @@ impl Tracer<'_> {
         }
         let mut v = power * albedo * (std::f32::consts::FRAC_1_PI * cos_x.abs() * proj.importance);
         if let Some(m) = self.medium {
-            v *= exp3(-m.sigma_t() * proj.dist);
+            v *= exp3(-Vec3::from(m.sigma_t()) * proj.dist);
         }
         let splat = Splat {
             pixel: proj.pixel,
@@ -259,7 +264,7 @@ impl Tracer<'_> {
         if m.sigma_s.max_element() <= 0.0 {
             return;
         }
-        let sigma_t = m.sigma_t();
+        let sigma_t = Vec3::from(m.sigma_t());
         let mean = sigma_t.element_sum() / 3.0;
         let (s, pdf) = if mean > 0.0 {
             // Free flight with rate σ̄, truncated to [0, len].
@@ -288,7 +293,7 @@ impl Tracer<'_> {
         }
         let phase = henyey_greenstein(d.dot(proj.to_eye), m.g);
         let t = exp3(-sigma_t * (s + proj.dist));
-        let v = power * t * m.sigma_s * (phase * proj.importance / pdf);
+        let v = power * t * Vec3::from(m.sigma_s) * (phase * proj.importance / pdf);
         if v.is_finite() {
             out.push(Splat {
                 pixel: proj.pixel,
