@@ -39,9 +39,10 @@
 //! ```
 //!
 //! Dependencies: `rayon` runs the work units in parallel (work stealing, scoped, the
-//! standard choice); `obvhs` is the BVH (see `bvh.rs` for why); `rand_xoshiro` gives
-//! xoshiro256++, a small fast generator with SplitMix64 seeding, so each work unit
-//! gets an independent stream from a hash of (seed, unit).
+//! standard choice); `obvhs` is the mesh BVH and the ray–triangle test (see `bvh.rs`
+//! for why; heightfields use the same test on their own grid, `heightfield.rs`);
+//! `rand_xoshiro` gives xoshiro256++, a small fast generator with SplitMix64 seeding,
+//! so each work unit gets an independent stream from a hash of (seed, unit).
 
 mod accumulate;
 mod bvh;
@@ -66,7 +67,7 @@ use crate::tracer::{PowerFilter, Tracer, UnitOutput};
 
 pub use eps::EPSILON_POLICY;
 
-/// Most batches accepted (each holds a full-resolution `f64` image in memory).
+/// Most batches accepted (each holds up to a full-resolution `f64` image in memory).
 pub const MAX_BATCHES: u32 = 1024;
 
 /// Errors of the reference renderer.
@@ -169,8 +170,8 @@ pub struct Reference {
 }
 
 impl Reference {
-    /// Prepares `scene`: intersection structures (a BVH over heightfield and mesh
-    /// triangles) and the emission setup.
+    /// Prepares `scene`: intersection structures (a grid per heightfield, a BVH
+    /// over mesh triangles) and the emission setup.
     pub fn new(scene: &Scene) -> Result<Self, ReferenceError> {
         if scene.camera.width == 0 || scene.camera.height == 0 {
             return Err(ReferenceError::Unsupported(
