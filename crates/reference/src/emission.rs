@@ -252,12 +252,18 @@ impl Emitter {
     /// Draws a photon from four uniform numbers in [0, 1).
     #[inline]
     pub(crate) fn sample(&self, u: [f32; 4]) -> Photon {
-        let total = self.cdf.last().copied().unwrap_or(0.0);
-        let li = pick(&self.cdf, u[0]);
-        let prev = if li == 0 { 0.0 } else { self.cdf[li - 1] };
-        let p_light = (self.cdf[li] - prev) / total;
-        // Reuse u[0] within the chosen light's interval for the light's own choice.
-        let u0 = ((u[0] * total - prev) / (self.cdf[li] - prev)).clamp(0.0, 0.999_999_9);
+        let (li, p_light, u0) = if self.cdf.len() == 1 {
+            // One light: chosen with probability 1, u[0] left as it is.
+            (0, 1.0, u[0])
+        } else {
+            let total = self.cdf.last().copied().unwrap_or(0.0);
+            let li = pick(&self.cdf, u[0]);
+            let prev = if li == 0 { 0.0 } else { self.cdf[li - 1] };
+            let p_light = (self.cdf[li] - prev) / total;
+            // Reuse u[0] within the chosen light's interval for the light's own choice.
+            let u0 = ((u[0] * total - prev) / (self.cdf[li] - prev)).clamp(0.0, 0.999_999_9);
+            (li, p_light, u0)
+        };
         let mut photon = match &self.samplers[li] {
             Sampler::Directional {
                 dir,
