@@ -214,10 +214,14 @@ pub fn run(o: &RunOptions) -> Result<RunOutcome> {
     let errors = match &reference {
         Some(r) => {
             let surface_errors = caustics_metrics::all_errors(&surface, &r.surface, &tone)?;
-            caustics_metrics::write_png(
-                &dir.join("error.png"),
-                &caustics_metrics::error_map(&surface, &r.surface)?,
+            // Scale topped at the 99th percentile: cusps would otherwise black out the rest.
+            let top = caustics_metrics::error_quantile(&surface, &r.surface, 0.99)?;
+            let map = caustics_metrics::error_map_with_max(
+                &surface,
+                &r.surface,
+                (top > 0.0).then_some(top),
             )?;
+            caustics_metrics::write_png(&dir.join("error.png"), &map)?;
             images.insert("error".into(), "error.png".into());
             let volume_errors = match &r.volume {
                 Some(v) => Some(caustics_metrics::all_errors(&volume, v, &tone)?),

@@ -111,16 +111,9 @@ pub fn error_map(test: &HdrImage, reference: &HdrImage) -> Result<Rgb8Image, Met
     error_map_with_max(test, reference, None)
 }
 
-/// [`error_map`] with the top of the scale fixed at `max` (errors above it saturate), so
-/// that several methods' error maps share one scale. `None` uses the largest error.
-pub fn error_map_with_max(
-    test: &HdrImage,
-    reference: &HdrImage,
-    max: Option<f64>,
-) -> Result<Rgb8Image, MetricsError> {
-    check_pair(test, reference)?;
-    let errors: Vec<f64> = test
-        .pixels
+/// Per-pixel `Y(|t − r|)` of two checked images.
+fn error_luminance(test: &HdrImage, reference: &HdrImage) -> Vec<f64> {
+    test.pixels
         .iter()
         .zip(&reference.pixels)
         .map(|(t, r)| {
@@ -131,7 +124,41 @@ pub fn error_map_with_max(
                 .map(|(&w, d)| f64::from(w) * d)
                 .sum()
         })
+        .collect()
+}
+
+/// The `q`-quantile (0..=1) of the per-pixel error luminance `Y(|t − r|)` over the
+/// pixels where it is non-zero (0 when the images are equal). A caustic's cusps put a
+/// few pixels orders of magnitude above the rest; a scale topped at, say, the 0.99
+/// quantile shows where the error is instead of only where it peaks.
+pub fn error_quantile(test: &HdrImage, reference: &HdrImage, q: f64) -> Result<f64, MetricsError> {
+    check_pair(test, reference)?;
+    if !(0.0..=1.0).contains(&q) {
+        return Err(MetricsError::InvalidParameter {
+            name: "q",
+            message: format!("must be in [0, 1], got {q}"),
+        });
+    }
+    let mut e: Vec<f64> = error_luminance(test, reference)
+        .into_iter()
+        .filter(|&v| v > 0.0)
         .collect();
+    if e.is_empty() {
+        return Ok(0.0);
+    }
+    e.sort_by(f64::total_cmp);
+    Ok(e[((e.len() - 1) as f64 * q).round() as usize])
+}
+
+/// [`error_map`] with the top of the scale fixed at `max` (errors above it saturate), so
+/// that several methods' error maps share one scale. `None` uses the largest error.
+pub fn error_map_with_max(
+    test: &HdrImage,
+    reference: &HdrImage,
+    max: Option<f64>,
+) -> Result<Rgb8Image, MetricsError> {
+    check_pair(test, reference)?;
+    let errors = error_luminance(test, reference);
     let max = match max {
         Some(m) if m > 0.0 && m.is_finite() => m,
         Some(m) => {

@@ -41,8 +41,8 @@ pub use crate::error_metrics::{
 pub use crate::flip::{FLIP_PIXELS_PER_DEGREE, flip, flip_map};
 pub use crate::heatmap::{
     COLOR_BAR_WIDTH, HeatmapOptions, Histogram, HistogramBucket, MIN_MAP_HEIGHT, PANEL_BACKGROUND,
-    ZERO_COUNT_COLOUR, error_map, error_map_with_max, format_count, format_value, heatmap,
-    heatmap_with, histogram,
+    ZERO_COUNT_COLOUR, error_map, error_map_with_max, error_quantile, format_count, format_value,
+    heatmap, heatmap_with, histogram,
 };
 pub use crate::image::{HdrImage, REC709_LUMINANCE, Rgb8Image, luminance};
 pub use crate::io::{atomic_write, atomic_write_with, read_exr, read_png, write_exr, write_png};

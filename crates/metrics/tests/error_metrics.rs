@@ -302,3 +302,23 @@ fn ssim_range_must_be_positive() {
     assert!(caustics_metrics::ssim_with_range(&r, &r, Some(0.0)).is_err());
     assert!(caustics_metrics::ssim_with_range(&r, &r, Some(f64::NAN)).is_err());
 }
+
+#[test]
+fn error_quantile_ignores_equal_pixels_and_picks_the_quantile() {
+    let r = HdrImage::new(4, 1);
+    let mut t = HdrImage::new(4, 1);
+    t.pixels[1] = [1.0; 3];
+    t.pixels[2] = [2.0; 3];
+    t.pixels[3] = [100.0; 3];
+    assert_eq!(
+        caustics_metrics::error_quantile(&r, &r, 0.99).expect("ok"),
+        0.0
+    );
+    let q0 = caustics_metrics::error_quantile(&t, &r, 0.0).expect("ok");
+    let q1 = caustics_metrics::error_quantile(&t, &r, 1.0).expect("ok");
+    assert!(
+        (q0 - 1.0).abs() < 1e-6 && (q1 - 100.0).abs() < 1e-4,
+        "{q0} {q1}"
+    );
+    assert!(caustics_metrics::error_quantile(&t, &r, 1.5).is_err());
+}
