@@ -1,0 +1,245 @@
+// Pass 2 of pinhole (Wand & Straßer 2003, §3.1): every receiver pixel loops over the
+// point samples of the generator, each a pinhole camera projecting the light's cube
+// map: the vector from the receiver x to the sample p is reflected (mirror) or
+// refracted through the sphere, the result looks up the light map, and the value is
+// weighted by cos(theta_s) cos(theta_x) A_s / (d² + eps) and by the reflectance or the
+// Fresnel transmittances. One instance of a fullscreen triangle per batch of samples,
+// added into the surface target (the paper's additive passes of a few samples each).
+// With filtering on, the lookup averages the map (footprint assembly, as texldd) over the
+// footprint of the sample's patch: the lookup vectors at p ± r t1 and p ± r t2, the
+// normals there taken from the principal curvatures (differential point samples).
+
+@group(1) @binding(0) var<uniform> params: Params;
+@group(1) @binding(1) var<storage, read> samples: array<Sample>;
+@group(1) @binding(2) var<storage, read> sample_light: array<vec4<f32>>;
+// receiver fragments, pairs (lo, hi), texture fetches (lo, hi): count frames only.
+@group(1) @binding(3) var<storage, read_write> counters: array<atomic<u32>>;
+@group(1) @binding(4) var light_map: texture_2d<f32>;
+@group(1) @binding(5) var light_sampler: sampler;
+
+struct VsOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) @interpolate(flat) batch: u32,
+}
+
+@vertex
+fn vs_gather(@builtin(vertex_index) vi: u32, @builtin(instance_index) batch: u32) -> VsOut {
+    let uv = vec2<f32>(f32((vi << 1u) & 2u), f32(vi & 2u));
+    var o: VsOut;
+    o.clip = vec4<f32>(uv * 2.0 - 1.0, 0.0, 1.0);
+    o.batch = batch;
+    return o;
+}
+
+// Where the light that reaches the receiver through a sample comes from.
+struct Path {
+    // xyz: light-map lookup vector; w: 1 valid, 0 no light can come this way.
+    lookup: vec4<f32>,
+    // The last specular point before the light (the sample for a mirror, the entry
+    // point for a refracting sphere).
+    origin: vec3<f32>,
+    // Product of the Fresnel transmittances (1 for a mirror).
+    transmit: f32,
+}
+
+fn no_path() -> Path {
+    return Path(vec4<f32>(0.0), vec3<f32>(0.0), 0.0);
+}
+
+// Far intersection of the ray (o, d) with the sphere (centre c, radius R): the exit.
+fn sphere_exit(o: vec3<f32>, d: vec3<f32>, c: vec3<f32>, radius: f32) -> f32 {
+    let oc = o - c;
+    let b = dot(oc, d);
+    let disc = b * b - (dot(oc, oc) - radius * radius);
+    if disc < 0.0 {
+        return NO_HIT;
+    }
+    return -b + sqrt(disc);
+}
+
+// Follows the ray from the receiver through the sample at o (direction din, unit)
+// with surface normal n (mirror: the lit side's; sphere: outward) towards the light.
+fn trace_path(light: GpuLight, din: vec3<f32>, o: vec3<f32>, n: vec3<f32>) -> Path {
+    if params.mode == MODE_MIRROR {
+        let r = reflect(din, n);
+        return Path(env_lookup(light, params, o, r), o, 1.0);
+    }
+    // Refracting sphere: in at o, out at the far side, both with exact Fresnel.
+    let obj = objects[params.generator];
+    let ior = materials[obj.material].ior;
+    let cos1 = -dot(din, n);
+    if cos1 <= 0.0 {
+        return no_path();
+    }
+    let f1 = fresnel_dielectric(cos1, 1.0 / ior);
+    let inside = refract(din, n, 1.0 / ior);
+    let t = sphere_exit(o, inside, obj.p0.xyz, obj.p0.w);
+    if f1 >= 1.0 || t == NO_HIT {
+        return no_path();
+    }
+    let p2 = o + t * inside;
+    let n2 = normalize(p2 - obj.p0.xyz);
+    let cos2 = dot(inside, n2);
+    let f2 = fresnel_dielectric(cos2, ior);
+    if f2 >= 1.0 || cos2 <= 0.0 {
+        return no_path();
+    }
+    let out_dir = refract(inside, -n2, ior);
+    return Path(env_lookup(light, params, p2, out_dir), p2, (1.0 - f1) * (1.0 - f2));
+}
+
+// Lookup vector of the neighbour point p + offset with normal nn: with the receiver's
+// direction to that point (FILTER_FULL, the paper's finite differences) or with the
+// centre's direction and origin (FILTER_CURVATURE: the normal's change alone).
+fn neighbour_lookup(light: GpuLight, x: vec3<f32>, din: vec3<f32>, p: vec3<f32>, offset: vec3<f32>, nn: vec3<f32>) -> vec4<f32> {
+    if params.filtering == FILTER_FULL {
+        let q = p + offset;
+        return trace_path(light, normalize(q - x), q, nn).lookup;
+    }
+    return trace_path(light, din, p, nn).lookup;
+}
+
+fn central_difference(a: vec4<f32>, b: vec4<f32>) -> vec3<f32> {
+    if a.w == 0.0 || b.w == 0.0 {
+        return vec3<f32>(0.0);
+    }
+    return a.xyz - b.xyz;
+}
+
+@fragment
+fn fs_gather(in: VsOut) -> @location(0) vec4<f32> {
+    count_fragment(in.clip);
+    let g = gbuffer_sample(vec2<u32>(in.clip.xy));
+    if !g.hit || materials[g.material].kind != MAT_DIFFUSE {
+        discard;
+    }
+    let light = lights[params.light_index];
+    let x = g.position;
+    let nx = g.facing_normal;
+    let x_start = x + nx * 1e-4;
+    let reflectance = materials[objects[params.generator].material].color.xyz;
+    let first = in.batch * params.batch_size;
+    let last = min(first + params.batch_size, params.sample_count);
+    var irradiance = vec3<f32>(0.0);
+    var fetches = 0u;
+    for (var i = first; i < last; i++) {
+        let s = samples[i];
+        let p = s.pos.xyz;
+        let to_x = x - p;
+        let d2 = dot(to_x, to_x);
+        let dist = sqrt(d2);
+        let wo = to_x / dist;
+        let cos_x = -dot(nx, wo);
+        if cos_x <= 0.0 {
+            continue;
+        }
+        var side = 1.0;
+        var radiance = vec3<f32>(0.0);
+        if params.mode == MODE_MIRROR {
+            let sl = sample_light[i];
+            side = sl.w;
+            radiance = sl.xyz * reflectance;
+        }
+        let n = side * s.normal.xyz;
+        let cos_s = dot(n, wo);
+        if cos_s <= 0.0 || (params.mode == MODE_MIRROR && all(radiance == vec3<f32>(0.0))) {
+            continue;
+        }
+        // The segment from the (lifted) receiver point exactly to the sample; hits
+        // within 1e-3 of its length from the sample are the sample's own surface.
+        let seg = p - x_start;
+        let seg_len = length(seg);
+        if occluded(x_start, seg / seg_len, seg_len, 0.0, max(s.extra.y, 1e-3 * seg_len)) {
+            continue;
+        }
+        let din = -wo;
+        let path = trace_path(light, din, p, n);
+        if path.lookup.w == 0.0 {
+            continue;
+        }
+        if params.mode == MODE_SPHERE_REFRACT {
+            radiance = path.transmit * light_radiance(light, params, path.origin + 1e-4 * normalize(path.origin - objects[params.generator].p0.xyz), 0.0);
+        }
+        var gx = vec3<f32>(0.0);
+        var gy = vec3<f32>(0.0);
+        if params.filtering != FILTER_OFF {
+            let r = s.extra.x;
+            let t1 = s.t1.xyz;
+            let t2 = s.t2.xyz;
+            // n(p + u t) = n + u k t on the surface; flipped with the side used.
+            let n1p = normalize(side * (s.normal.xyz + r * s.t1.w * t1));
+            let n1m = normalize(side * (s.normal.xyz - r * s.t1.w * t1));
+            let n2p = normalize(side * (s.normal.xyz + r * s.t2.w * t2));
+            let n2m = normalize(side * (s.normal.xyz - r * s.t2.w * t2));
+            gx = central_difference(
+                neighbour_lookup(light, x, din, p, r * t1, n1p),
+                neighbour_lookup(light, x, din, p, -r * t1, n1m));
+            gy = central_difference(
+                neighbour_lookup(light, x, din, p, r * t2, n2p),
+                neighbour_lookup(light, x, din, p, -r * t2, n2m));
+        }
+        let fetched = filtered_coverage(path.lookup.xyz, gx, gy);
+        let coverage = fetched.x;
+        fetches += u32(fetched.y);
+        irradiance += radiance * (coverage * cos_s * cos_x * s.pos.w / (d2 + s.normal.w));
+    }
+    if FILL_COUNT {
+        atomicAdd(&counters[0], 1u);
+        add_wide(1u, last - first);
+        add_wide(3u, fetches);
+    }
+    let albedo = materials[g.material].color.xyz;
+    return vec4<f32>(albedo * INV_PI * irradiance, 1.0);
+}
+
+// Texture coordinates of the lookup vector v on the map (the +Z face of the light's
+// cube map in the frame (map_u, map_v, map_axis), light_map.rs); z < 0: behind.
+fn map_uv(v: vec3<f32>) -> vec3<f32> {
+    let l = vec3<f32>(dot(v, params.map_u.xyz), dot(v, params.map_v.xyz), dot(v, params.map_axis.xyz));
+    return vec3<f32>(0.5 * l.xy / max(l.z, 1e-20) + 0.5, l.z);
+}
+
+// The light map averaged over the parallelogram footprint (centre v, edges gx, gy in
+// lookup space): footprint assembly (Schilling et al., the paper's ref. 18), what
+// texldd / textureSampleGrad do in hardware. The mip level comes from the minor
+// axis, and up to MAX_ANISOTROPY probes are spread along the major axis. Done in the
+// shader because lavapipe ignores explicit gradients on cube maps (gradients scaled by
+// 1000 left the image unchanged), and the footprint must mean the same on every
+// adapter. Returns (coverage, probes taken).
+const MAX_ANISOTROPY: f32 = 16.0;
+
+fn filtered_coverage(v: vec3<f32>, gx: vec3<f32>, gy: vec3<f32>) -> vec2<f32> {
+    let c = map_uv(v);
+    // The light covers less than 45° around the axis: nothing outside the face.
+    if c.z <= 0.0 || any(c.xy < vec2<f32>(0.0)) || any(c.xy > vec2<f32>(1.0)) {
+        return vec2<f32>(0.0, 0.0);
+    }
+    let size = f32(textureDimensions(light_map).x);
+    let du = map_uv(v + 0.5 * gx).xy - map_uv(v - 0.5 * gx).xy;
+    let dv = map_uv(v + 0.5 * gy).xy - map_uv(v - 0.5 * gy).xy;
+    let lx = length(du) * size;
+    let ly = length(dv) * size;
+    let major = select(dv, du, lx >= ly);
+    let p_max = max(lx, ly);
+    let p_min = min(lx, ly);
+    if p_max <= 1.0 {
+        return vec2<f32>(textureSampleLevel(light_map, light_sampler, c.xy, 0.0).r, 1.0);
+    }
+    let n = clamp(ceil(p_max / max(p_min, 1e-6)), 1.0, MAX_ANISOTROPY);
+    let lod = log2(max(p_max / n, 1.0));
+    var sum = 0.0;
+    let count = u32(n);
+    for (var i = 0u; i < count; i++) {
+        let f = (f32(i) + 0.5) / n - 0.5;
+        sum += textureSampleLevel(light_map, light_sampler, c.xy + f * major, lod).r;
+    }
+    return vec2<f32>(sum / n, n);
+}
+
+// Adds to the 64-bit counter in counters[at] (low word) and counters[at + 1] (high).
+fn add_wide(at: u32, v: u32) {
+    let old = atomicAdd(&counters[at], v);
+    if old + v < old {
+        atomicAdd(&counters[at + 1u], 1u);
+    }
+}

@@ -1,0 +1,840 @@
+//! `pinhole`: Wand & Straßer (2003), "Real-Time Caustics", as a caustics-bench method.
+//!
+//! The caustic generator is discretized into point samples ([`sampling`]), each a
+//! pinhole camera that projects the light, held in a cube environment map
+//! ([`light_map`]), onto the receivers. Per receiver pixel (camera G-buffer), a
+//! fragment loop over the samples reflects (mirror) or refracts (glass sphere, in and
+//! out) the vector from the receiver to the sample, looks up the map and adds
+//!
+//! ```text
+//! E(x) += L_light(lookup) · R · cos θ_s · cos θ_x · A_s / (d² + ε)
+//! ```
+//!
+//! with R the mirror's reflectance or the product of the two exact Fresnel
+//! transmittances, A_s the area the sample stands for and ε = `epsilon_scale` · A_s
+//! (the paper's "diameter of the sample's region, squared"); the pixel's radiance is
+//! ρ/π · E, in DESIGN units. With `filtering` on, the lookup averages the map over
+//! the footprint of the sample's patch, from differential point samples (principal
+//! curvatures), as the paper does with `texldd`: mip level from the footprint's minor
+//! axis and up to 16 probes along its major axis (footprint assembly, done in the
+//! shader because lavapipe ignores explicit gradients on cube maps).
+//!
+//! What is exact and what is not:
+//! * exact: the radiometry of one sample (the irradiance through a small mirror or
+//!   lens patch, up to the ε term and first order in the patch size), the Fresnel
+//!   terms, the visibility of the receiver→sample segment and of the sample→light
+//!   segment (tested against the scene's analytic objects, which the paper omits);
+//! * converging with the sample count: the sum over samples is a quadrature of the
+//!   integral over the generator's surface; unfiltered it shows the discrete images of
+//!   the light (the paper's aliasing), filtered it blurs each image over its patch;
+//! * an approximation that stays: the light has a size. A point/spot light is a disc
+//!   of radius ρ = D·tan(`light_angle`) facing the cube map's centre (the generator's
+//!   centre, at distance D), with the radiance that sends the light's intensity to each
+//!   sample; a directional light a cone of half angle `light_angle`. The caustic is the
+//!   one of that extended light (blurred by about ρ), where the reference uses a true
+//!   point. The map is parallax-corrected (lookup = where the ray meets the disc's
+//!   plane, minus the centre), so one map serves every sample though the ring's light
+//!   is close to the ring; the paper's "light far away" assumption is not needed.
+//!   The map is the light's cube map in a frame aimed at the light, whose one
+//!   non-empty face is stored and addressed in the shader ([`light_map`]).
+//! * the footprint: the paper differences at distance r = half the sample spacing on
+//!   one side; we take central differences at ±r, so the footprint spans the sample's
+//!   whole patch and neighbouring footprints tile. `filtering=full` (default) moves the
+//!   point and its normal, as the paper; `filtering=curvature` moves the normal only
+//!   (zero footprint on a flat mirror); `filtering=off` point-samples level 0.
+//!
+//! Supports one light of any kind and one caustic generator: a mirror sphere, open
+//! cylinder (Wand's ring) or quad, or a dielectric sphere. Every object must be
+//! analytic (sphere, quad, cylinder), for the visibility tests. It renders one
+//! specular event per path (the paper's restriction): light reflected twice inside
+//! the ring, or reflected off the glass sphere, is missing; no volume caustics.
+
+pub mod light_map;
+pub mod sampling;
+
+use bytemuck::{Pod, Zeroable};
+use caustics_gpu::textures::{additive_hdr_target, load_attachment};
+use caustics_gpu::wgpu::{self, util::DeviceExt};
+use caustics_gpu::{CountedPipeline, Frame, GpuContext, Renderer, pass_desc, shader};
+use caustics_method::{
+    Capabilities, CausticsMethod, Counters, MethodError, MethodInfo, Unsupported, param_specs,
+    parse_params,
+};
+use caustics_scene::{Light, Material, Scene, Shape, Vec3};
+use serde::{Deserialize, Serialize};
+
+pub use sampling::{PointSample, Strategy};
+
+const TYPES_WGSL: &str = include_str!("types.wgsl");
+const PREPARE_WGSL: &str = include_str!("prepare.wgsl");
+const GATHER_WGSL: &str = include_str!("gather.wgsl");
+
+/// A pass's full WGSL: shared GPU files, pinhole's types, then the pass.
+fn pass_source(pass: &str) -> String {
+    shader::compose_method(&format!("{TYPES_WGSL}\n{pass}"))
+}
+
+/// Registry name.
+pub const NAME: &str = "pinhole";
+
+/// How the projected light is filtered (§3.3).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum Filtering {
+    /// Point lookups (bilinear on level 0): the paper's "no filtering".
+    Off,
+    /// Footprint from the change of the normal alone (zero on flat mirrors).
+    Curvature,
+    /// Footprint from the change of point and normal (the paper's finite differences).
+    #[default]
+    Full,
+}
+
+impl Filtering {
+    fn code(self) -> u32 {
+        match self {
+            Filtering::Off => 0,
+            Filtering::Curvature => 1,
+            Filtering::Full => 2,
+        }
+    }
+}
+
+/// Parameters of `pinhole` (defaults: the paper's choices).
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(default, deny_unknown_fields)]
+pub struct PinholeParams {
+    /// Sampling strategy of the reflector (§3.2).
+    pub sampling: Strategy,
+    /// Number of point samples (the paper sweeps 100, 1000, 10000).
+    pub samples: u32,
+    /// Seed of the sample generator.
+    pub seed: u64,
+    /// Anisotropic filtering of the projected light (§3.3).
+    pub filtering: Filtering,
+    /// Angular radius (rad) of the light in the cube map as seen from the generator's
+    /// centre; the paper's point light covers 0.0008 sr, i.e. 0.016 rad.
+    pub light_angle: f64,
+    /// Light map (cube face) size in texels (power of two); the paper uses 256.
+    pub cube_size: u32,
+    /// ε = epsilon_scale · A_s is added to d² (the paper: the sample region's diameter squared).
+    pub epsilon_scale: f64,
+    /// Samples per gather instance (the paper's samples per pass).
+    pub samples_per_pass: u32,
+}
+
+impl Default for PinholeParams {
+    fn default() -> Self {
+        Self {
+            sampling: Strategy::NeighborRemoval,
+            samples: 1000,
+            seed: 1,
+            filtering: Filtering::Full,
+            light_angle: 0.016,
+            cube_size: 256,
+            epsilon_scale: 1.0,
+            samples_per_pass: 64,
+        }
+    }
+}
+
+impl PinholeParams {
+    /// Range checks, with errors naming the parameter and what was expected.
+    pub fn validate(&self) -> Result<(), MethodError> {
+        let err = |message: String| {
+            Err(MethodError::Param {
+                method: NAME,
+                message,
+            })
+        };
+        if !(1..=100_000).contains(&self.samples) {
+            return err(format!(
+                "samples: expected an integer in 1..=100000, got {}",
+                self.samples
+            ));
+        }
+        if !(self.light_angle.is_finite() && self.light_angle > 0.0 && self.light_angle <= 0.5) {
+            return err(format!(
+                "light_angle: expected an angle in (0, 0.5] radians, got {}",
+                self.light_angle
+            ));
+        }
+        if !(self.cube_size.is_power_of_two() && (8..=2048).contains(&self.cube_size)) {
+            return err(format!(
+                "cube_size: expected a power of two in 8..=2048, got {}",
+                self.cube_size
+            ));
+        }
+        if !(self.epsilon_scale.is_finite() && self.epsilon_scale >= 0.0) {
+            return err(format!(
+                "epsilon_scale: expected a number >= 0, got {}",
+                self.epsilon_scale
+            ));
+        }
+        if !(1..=4096).contains(&self.samples_per_pass) {
+            return err(format!(
+                "samples_per_pass: expected an integer in 1..=4096, got {}",
+                self.samples_per_pass
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// The registry entry.
+pub fn info() -> MethodInfo {
+    MethodInfo {
+        name: NAME,
+        summary: "reflector point samples as pinhole cameras projecting the light's cube map, 4 sampling strategies, curvature-based anisotropic filtering",
+        source: "Wand & Straßer 2003, Real-Time Caustics (wand-strasser-2003-real-time-caustics.txt)",
+        capabilities: Capabilities {
+            surface: true,
+            volume: false,
+            reflection: true,
+            refraction: true,
+            multiple_bounces: false,
+            directional_light: true,
+            point_light: true,
+            spot_light: true,
+        },
+        params: || {
+            param_specs::<PinholeParams>(&[
+                (
+                    "sampling",
+                    "random | grid | quantized | neighbor_removal (the paper's §3.2)",
+                ),
+                (
+                    "samples",
+                    "number of point samples on the generator (paper: 100, 1000, 10000)",
+                ),
+                ("seed", "seed of the sample generator"),
+                (
+                    "filtering",
+                    "off | curvature | full: textureSampleGrad footprint of each sample's patch (§3.3)",
+                ),
+                (
+                    "light_angle",
+                    "angular radius (rad) of the light in the cube map, seen from the generator's centre",
+                ),
+                ("cube_size", "cube map face size in texels (power of two)"),
+                (
+                    "epsilon_scale",
+                    "eps = epsilon_scale x A_s is added to d^2 (paper: sample diameter squared)",
+                ),
+                (
+                    "samples_per_pass",
+                    "samples per gather instance (additive passes)",
+                ),
+            ])
+        },
+        validate_params: |v| parse_params::<PinholeParams>(NAME, v)?.validate(),
+        check_scene,
+        create,
+    }
+}
+
+/// The scene's one caustic generator, or why `pinhole` cannot render the scene.
+pub fn caustic_generator(scene: &Scene) -> Result<usize, Unsupported> {
+    if scene.lights.len() != 1 {
+        return Err(Unsupported(format!(
+            "needs exactly one light (one cube map), the scene has {}",
+            scene.lights.len()
+        )));
+    }
+    let mut generator = None;
+    for (i, o) in scene.objects.iter().enumerate() {
+        if matches!(o.shape, Shape::Mesh(_) | Shape::Heightfield(_)) {
+            return Err(Unsupported(format!(
+                "objects[{i}] is a {}; pinhole's visibility tests need analytic objects (sphere, quad, cylinder)",
+                o.shape.kind()
+            )));
+        }
+        let material = scene.material(o);
+        if !material.is_specular() {
+            continue;
+        }
+        let supported = matches!(
+            (material, &o.shape),
+            (Material::Mirror { .. }, _) | (Material::Dielectric { .. }, Shape::Sphere { .. })
+        );
+        if !supported {
+            return Err(Unsupported(format!(
+                "objects[{i}] is a dielectric {}; pinhole refracts through spheres only",
+                o.shape.kind()
+            )));
+        }
+        if let Some(first) = generator {
+            return Err(Unsupported(format!(
+                "objects[{first}] and objects[{i}] are both specular; pinhole follows one specular object (the paper's single interaction)"
+            )));
+        }
+        generator = Some(i);
+    }
+    generator.ok_or_else(|| Unsupported("the scene has no specular object".into()))
+}
+
+fn check_scene(scene: &Scene, _params: &serde_json::Value) -> Result<(), Unsupported> {
+    let g = caustic_generator(scene)?;
+    if let Light::Point { position, .. } | Light::Spot { position, .. } = scene.lights[0] {
+        let centre = scene.objects[g].shape.bounds().center();
+        if position.distance(centre) < 1e-3 {
+            return Err(Unsupported(
+                "the light sits at the generator's centre, where the cube map is centred".into(),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Matches `Sample` in types.wgsl.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct GpuSample {
+    pos: [f32; 4],
+    normal: [f32; 4],
+    t1: [f32; 4],
+    t2: [f32; 4],
+    extra: [f32; 4],
+}
+
+/// Matches `Params` in types.wgsl.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct GpuParams {
+    generator: u32,
+    light_index: u32,
+    sample_count: u32,
+    batch_size: u32,
+    mode: u32,
+    filtering: u32,
+    _pad: [u32; 2],
+    map_center: [f32; 4],
+    map_axis: [f32; 4],
+    map_u: [f32; 4],
+    map_v: [f32; 4],
+    light_scale: [f32; 4],
+}
+
+/// The cube map's geometry for a light: centre, disc axis, disc radius (m; 0 for a
+/// directional light), the map's cone half angle and the disc's radiance per unit
+/// light power.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LightDisc {
+    /// Centre of the cube map (point/spot: the generator's centre).
+    pub center: Vec3,
+    /// Unit axis of the light's cone in the map.
+    pub axis: Vec3,
+    /// Disc radius in metres (point/spot), 0 for a directional light.
+    pub radius: f32,
+    /// Half angle of the cone in the map (rad).
+    pub alpha: f32,
+    /// Radiance per W/sr (point/spot: 1/(π ρ²)) or per W/m² (directional: 1/Ω).
+    pub radiance_per_power: f32,
+}
+
+impl LightDisc {
+    /// The disc of `light` for a generator centred at `center`, `alpha` radians wide.
+    pub fn new(light: &Light, center: Vec3, alpha: f32) -> Self {
+        match *light {
+            Light::Directional { direction, .. } => {
+                let solid_angle = std::f32::consts::TAU * (1.0 - alpha.cos());
+                Self {
+                    center,
+                    axis: -direction,
+                    radius: 0.0,
+                    alpha,
+                    radiance_per_power: 1.0 / solid_angle,
+                }
+            }
+            Light::Point { position, .. } | Light::Spot { position, .. } => {
+                let to = position - center;
+                let d = to.length();
+                let radius = d * alpha.tan();
+                Self {
+                    center,
+                    axis: to / d,
+                    radius,
+                    alpha,
+                    radiance_per_power: 1.0 / (std::f32::consts::PI * radius * radius),
+                }
+            }
+        }
+    }
+}
+
+/// `pinhole` bound to one scene.
+pub struct Pinhole {
+    prepare_pipeline: wgpu::ComputePipeline,
+    gather_pipeline: CountedPipeline<wgpu::RenderPipeline>,
+    prepare_bind: wgpu::BindGroup,
+    gather_bind: wgpu::BindGroup,
+    counters: wgpu::Buffer,
+    sample_count: u32,
+    batches: u32,
+    receiver_pixels_hint: u64,
+    bytes: u64,
+}
+
+fn create(
+    ctx: &GpuContext,
+    renderer: &Renderer,
+    params: &serde_json::Value,
+) -> Result<Box<dyn CausticsMethod>, MethodError> {
+    let p: PinholeParams = parse_params(NAME, params)?;
+    p.validate()?;
+    Ok(Box::new(Pinhole::new(ctx, renderer, &p)?))
+}
+
+/// The GPU form of the samples, with ε and the finite-difference step filled in.
+fn gpu_samples(samples: &[PointSample], epsilon_scale: f32) -> Vec<GpuSample> {
+    samples
+        .iter()
+        .map(|s| {
+            let p = &s.point;
+            GpuSample {
+                pos: p.position.extend(s.area).to_array(),
+                normal: p.normal.extend(epsilon_scale * s.area).to_array(),
+                t1: p.t1.extend(p.k1).to_array(),
+                t2: p.t2.extend(p.k2).to_array(),
+                extra: [0.5 * s.area.sqrt(), s.displacement, 0.0, 0.0],
+            }
+        })
+        .collect()
+}
+
+fn entry(
+    binding: u32,
+    visibility: wgpu::ShaderStages,
+    ty: wgpu::BindingType,
+) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility,
+        ty,
+        count: None,
+    }
+}
+
+fn buffer_ty(ty: wgpu::BufferBindingType) -> wgpu::BindingType {
+    wgpu::BindingType::Buffer {
+        ty,
+        has_dynamic_offset: false,
+        min_binding_size: None,
+    }
+}
+
+impl Pinhole {
+    /// Samples the scene's generator, builds the light's cube map and the two passes.
+    pub fn new(
+        ctx: &GpuContext,
+        renderer: &Renderer,
+        params: &PinholeParams,
+    ) -> Result<Self, MethodError> {
+        let scene = &renderer.scene().scene;
+        let unsupported = |reason| MethodError::Unsupported {
+            method: NAME,
+            scene: scene.name.clone(),
+            reason,
+        };
+        let generator = caustic_generator(scene).map_err(unsupported)?;
+        check_scene(scene, &serde_json::Value::Null).map_err(unsupported)?;
+        let shape = &scene.objects[generator].shape;
+        let samples =
+            sampling::generate(shape, params.sampling, params.samples as usize, params.seed)
+                .map_err(|e| unsupported(Unsupported(e.to_string())))?;
+        let disc = LightDisc::new(
+            &scene.lights[0],
+            shape.bounds().center(),
+            params.light_angle as f32,
+        );
+        let mode = match scene.material(&scene.objects[generator]) {
+            Material::Dielectric { .. } => 1,
+            _ => 0,
+        };
+        let res = ctx.checked("pinhole setup", || {
+            Self::build(
+                ctx,
+                renderer,
+                params,
+                generator as u32,
+                mode,
+                &samples,
+                &disc,
+            )
+        })?;
+        Ok(res)
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn build(
+        ctx: &GpuContext,
+        renderer: &Renderer,
+        params: &PinholeParams,
+        generator: u32,
+        mode: u32,
+        samples: &[PointSample],
+        disc: &LightDisc,
+    ) -> Self {
+        let device = &ctx.device;
+        let sample_count = samples.len() as u32;
+        let (map_u, map_v) = caustics_scene::perpendicular_frame(disc.axis);
+        let gpu_params = GpuParams {
+            generator,
+            light_index: 0,
+            sample_count,
+            batch_size: params.samples_per_pass,
+            mode,
+            filtering: params.filtering.code(),
+            _pad: [0; 2],
+            map_center: disc.center.extend(0.0).to_array(),
+            map_axis: disc.axis.extend(disc.radius).to_array(),
+            map_u: map_u.extend(0.0).to_array(),
+            map_v: map_v.extend(0.0).to_array(),
+            light_scale: [disc.radiance_per_power, disc.alpha.cos(), 0.0, 0.0],
+        };
+        let init = |label: &str, contents: &[u8], usage| {
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents,
+                usage,
+            })
+        };
+        let params_buffer = init(
+            "pinhole params",
+            bytemuck::bytes_of(&gpu_params),
+            wgpu::BufferUsages::UNIFORM,
+        );
+        let samples_buffer = init(
+            "pinhole samples",
+            bytemuck::cast_slice(&gpu_samples(samples, params.epsilon_scale as f32)),
+            wgpu::BufferUsages::STORAGE,
+        );
+        let sample_light = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("pinhole sample light"),
+            size: sample_count as u64 * 16,
+            usage: wgpu::BufferUsages::STORAGE,
+            mapped_at_creation: false,
+        });
+        let counters = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("pinhole counters"),
+            size: 32,
+            usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_DST
+                | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+
+        // The light's map (the +Z face of its cube map) with its mip chain (light_map.rs).
+        let size = params.cube_size;
+        let levels = light_map::coverage_mips(size, disc.alpha);
+        let texture = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("pinhole light map"),
+            size: wgpu::Extent3d {
+                width: size,
+                height: size,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: levels.len() as u32,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::R16Float,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+            view_formats: &[],
+        });
+        let mut texture_bytes = 0u64;
+        for (level, data) in levels.iter().enumerate() {
+            let w = (size >> level).max(1);
+            let bytes: Vec<u8> = data
+                .iter()
+                .flat_map(|&v| light_map::f16_bits(v).to_le_bytes())
+                .collect();
+            texture_bytes += bytes.len() as u64;
+            ctx.queue.write_texture(
+                wgpu::TexelCopyTextureInfo {
+                    texture: &texture,
+                    mip_level: level as u32,
+                    origin: wgpu::Origin3d::ZERO,
+                    aspect: wgpu::TextureAspect::All,
+                },
+                &bytes,
+                wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(2 * w),
+                    rows_per_image: Some(w),
+                },
+                wgpu::Extent3d {
+                    width: w,
+                    height: w,
+                    depth_or_array_layers: 1,
+                },
+            );
+        }
+        let cube_view = texture.create_view(&wgpu::TextureViewDescriptor::default());
+        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("pinhole light map"),
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            mipmap_filter: wgpu::MipmapFilterMode::Linear,
+            ..Default::default()
+        });
+
+        let cs = wgpu::ShaderStages::COMPUTE;
+        let fs = wgpu::ShaderStages::FRAGMENT;
+        let storage = |read_only| buffer_ty(wgpu::BufferBindingType::Storage { read_only });
+        let uniform = buffer_ty(wgpu::BufferBindingType::Uniform);
+        let prepare_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("pinhole prepare"),
+            entries: &[
+                entry(0, cs, uniform),
+                entry(1, cs, storage(true)),
+                entry(2, cs, storage(false)),
+            ],
+        });
+        let gather_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("pinhole gather"),
+            entries: &[
+                entry(0, fs, uniform),
+                entry(1, fs, storage(true)),
+                entry(2, fs, storage(true)),
+                entry(3, fs, storage(false)),
+                entry(
+                    4,
+                    fs,
+                    wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                ),
+                entry(
+                    5,
+                    fs,
+                    wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                ),
+            ],
+        });
+        let prepare_bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("pinhole prepare"),
+            layout: &prepare_layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: params_buffer.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: samples_buffer.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: sample_light.as_entire_binding(),
+                },
+            ],
+        });
+        let gather_bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("pinhole gather"),
+            layout: &gather_layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: params_buffer.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: samples_buffer.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: sample_light.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 3,
+                    resource: counters.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 4,
+                    resource: wgpu::BindingResource::TextureView(&cube_view),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 5,
+                    resource: wgpu::BindingResource::Sampler(&sampler),
+                },
+            ],
+        });
+        let pipeline_layout = |label: &str, own: &wgpu::BindGroupLayout| {
+            device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some(label),
+                bind_group_layouts: &[Some(renderer.frame_layout()), Some(own)],
+                immediate_size: 0,
+            })
+        };
+        let prepare_module =
+            shader::module(device, "pinhole prepare.wgsl", pass_source(PREPARE_WGSL));
+        let prepare_pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("pinhole prepare"),
+            layout: Some(&pipeline_layout("pinhole prepare", &prepare_layout)),
+            module: &prepare_module,
+            entry_point: Some("prepare_samples"),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+        let gather_module = shader::module(device, "pinhole gather.wgsl", pass_source(GATHER_WGSL));
+        let gather_layout_p = pipeline_layout("pinhole gather", &gather_layout);
+        let gather_pipeline = CountedPipeline::new(|constants| {
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some("pinhole gather"),
+                layout: Some(&gather_layout_p),
+                vertex: wgpu::VertexState {
+                    module: &gather_module,
+                    entry_point: Some("vs_gather"),
+                    compilation_options: Default::default(),
+                    buffers: &[],
+                },
+                primitive: Default::default(),
+                depth_stencil: None,
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &gather_module,
+                    entry_point: Some("fs_gather"),
+                    compilation_options: wgpu::PipelineCompilationOptions {
+                        constants,
+                        ..Default::default()
+                    },
+                    targets: &[Some(additive_hdr_target())],
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        });
+        let cam = &renderer.scene().scene.camera;
+        let bytes = params_buffer.size()
+            + samples_buffer.size()
+            + sample_light.size()
+            + counters.size()
+            + texture_bytes;
+        Self {
+            prepare_pipeline,
+            gather_pipeline,
+            prepare_bind,
+            gather_bind,
+            counters,
+            sample_count,
+            batches: sample_count.div_ceil(params.samples_per_pass),
+            receiver_pixels_hint: cam.width as u64 * cam.height as u64,
+            bytes,
+        }
+    }
+}
+
+impl CausticsMethod for Pinhole {
+    fn record(&mut self, frame: &mut Frame<'_>) -> Result<(), MethodError> {
+        let renderer = frame.renderer;
+        frame.encoder.clear_buffer(&self.counters, 0, None);
+        {
+            let mut pass = frame.compute_pass("pinhole/prepare_samples")?;
+            pass.set_pipeline(&self.prepare_pipeline);
+            pass.set_bind_group(0, renderer.frame_bind_group(), &[]);
+            pass.set_bind_group(1, &self.prepare_bind, &[]);
+            pass.dispatch_workgroups(self.sample_count.div_ceil(64), 1, 1);
+        }
+        let pipeline = self.gather_pipeline.get(frame);
+        let attachments = [load_attachment(&renderer.targets().surface.view)];
+        let mut pass = frame.render_pass("pinhole/gather", pass_desc(&attachments))?;
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, renderer.frame_bind_group(), &[]);
+        pass.set_bind_group(1, &self.gather_bind, &[]);
+        pass.draw(0..3, 0..self.batches);
+        Ok(())
+    }
+
+    fn counters(&self, ctx: &GpuContext) -> Result<Counters, MethodError> {
+        let c = caustics_gpu::readback::read_buffer_u32(
+            ctx,
+            &self.counters,
+            self.counters.size(),
+            "pinhole counters",
+        )?;
+        let wide = |lo: usize| c[lo] as u64 | (c[lo + 1] as u64) << 32;
+        let mut out = Counters::new();
+        out.insert("samples".into(), self.sample_count as u64);
+        out.insert("passes".into(), self.batches as u64);
+        out.insert("receiver_fragments".into(), c[0] as u64);
+        out.insert("sample_pixel_pairs".into(), wide(1));
+        out.insert("texture_fetches".into(), wide(3));
+        out.insert("camera_pixels".into(), self.receiver_pixels_hint);
+        Ok(out)
+    }
+
+    fn gpu_memory_bytes(&self) -> u64 {
+        self.bytes
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shaders_validate() -> Result<(), String> {
+        shader::validate_wgsl("prepare.wgsl", &pass_source(PREPARE_WGSL))?;
+        shader::validate_wgsl("gather.wgsl", &pass_source(GATHER_WGSL))
+    }
+
+    #[test]
+    fn bad_params_are_errors() {
+        for (json, needle) in [
+            (serde_json::json!({"samples": 0}), "samples"),
+            (serde_json::json!({"samples": 1_000_000}), "samples"),
+            (
+                serde_json::json!({"sampling": "poisson"}),
+                "unknown variant",
+            ),
+            (serde_json::json!({"filtering": "yes"}), "unknown variant"),
+            (serde_json::json!({"light_angle": 0.0}), "light_angle"),
+            (serde_json::json!({"cube_size": 300}), "cube_size"),
+            (serde_json::json!({"epsilon_scale": -1.0}), "epsilon_scale"),
+            (
+                serde_json::json!({"samples_per_pass": 0}),
+                "samples_per_pass",
+            ),
+            (serde_json::json!({"sample": 10}), "known parameters"),
+        ] {
+            let e =
+                parse_params::<PinholeParams>(NAME, &json).and_then(|p| p.validate().map(|_| p));
+            let msg = e.expect_err("must fail").to_string();
+            assert!(msg.contains(needle), "{json}: {msg}");
+        }
+        let ok = parse_params::<PinholeParams>(
+            NAME,
+            &serde_json::json!({"sampling": "quantized", "samples": 100, "filtering": "off"}),
+        )
+        .expect("valid");
+        assert_eq!(ok.sampling, Strategy::Quantized);
+        assert_eq!(ok.filtering, Filtering::Off);
+    }
+
+    #[test]
+    fn point_light_disc_sends_the_intensity() {
+        // Radiance × disc area = 1 W/sr per unit intensity, seen face on.
+        let light = Light::Point {
+            position: Vec3::new(0.85, 1.0, 0.0),
+            intensity: Vec3::ONE,
+        };
+        let d = LightDisc::new(&light, Vec3::new(0.0, 0.25, 0.0), 0.016);
+        let area = std::f32::consts::PI * d.radius * d.radius;
+        assert!((d.radiance_per_power * area - 1.0).abs() < 1e-5);
+        assert!((d.axis.length() - 1.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn scene_support_is_declared() {
+        let ring = Scene::load(&caustics_scene::resolve("ring").expect("ring")).expect("load");
+        assert_eq!(caustic_generator(&ring), Ok(0));
+        let sphere =
+            Scene::load(&caustics_scene::resolve("sphere_on_plane").expect("s")).expect("load");
+        assert_eq!(caustic_generator(&sphere), Ok(0));
+        let pool = Scene::load(&caustics_scene::resolve("water_pool").expect("p")).expect("load");
+        let why = caustic_generator(&pool).expect_err("heightfield").0;
+        assert!(why.contains("analytic"), "{why}");
+    }
+}

@@ -1,0 +1,148 @@
+//! The light as an environment map (Wand & Straßer §3.1: "the incoming light as an
+//! environment map").
+//!
+//! The map is the cube map of the light in a frame whose +Z axis points at the light's
+//! centre (the disc's axis): the light then lies in the middle of the +Z face, never on a
+//! seam, and the other five faces are empty, so only the +Z face is stored, as a 2D
+//! texture addressed in the shader (s, t) = (x/z, y/z) of the lookup in that frame. It
+//! holds the light's *coverage*: for each texel, the fraction of its solid angle inside a
+//! cone of half angle `alpha` around +Z (4×4 supersamples per texel), 1 inside the
+//! light's disc and 0 outside; the gather multiplies a lookup by the light's radiance.
+//! The mip chain is built by 2×2 box averaging, so a level holds the mean coverage over
+//! its footprint and the footprint filter averages the light without changing its
+//! energy. R16Float: filterable on every adapter (32-bit float filtering is optional).
+//! The addressing is done in the shader, not by a hardware cube lookup, because
+//! lavapipe's cube sampling was measured to misplace light for long lookup vectors
+//! (ghost images of the light far from it) and to ignore explicit gradients.
+//! The bench's lights do not move, so the map is built once per scene; the paper
+//! re-renders it per frame, which costs little next to the gather.
+
+/// Coverage of each texel of a `size`² map of the +Z face by the cone of half angle
+/// `alpha` (< 45°) around +Z, rows top first (t = −1 first); then each smaller mip
+/// level down to 1×1.
+pub fn coverage_mips(size: u32, alpha: f32) -> Vec<Vec<f32>> {
+    const SUB: u32 = 4;
+    let n = size as usize;
+    let cos_alpha = alpha.cos();
+    let inside = |s: f32, t: f32| 1.0 / (1.0 + s * s + t * t).sqrt() >= cos_alpha;
+    // Texels whose centre is beyond tan(alpha) + a texel diagonal from the centre are empty.
+    let reach = alpha.tan() + 3.0 / size as f32;
+    let mut level0 = vec![0.0f32; n * n];
+    for j in 0..n {
+        for i in 0..n {
+            let s = 2.0 * (i as f32 + 0.5) / size as f32 - 1.0;
+            let t = 2.0 * (j as f32 + 0.5) / size as f32 - 1.0;
+            if s * s + t * t > reach * reach {
+                continue;
+            }
+            let mut count = 0;
+            for sj in 0..SUB {
+                for si in 0..SUB {
+                    let s = 2.0 * (i as f32 + (si as f32 + 0.5) / SUB as f32) / size as f32 - 1.0;
+                    let t = 2.0 * (j as f32 + (sj as f32 + 0.5) / SUB as f32) / size as f32 - 1.0;
+                    if inside(s, t) {
+                        count += 1;
+                    }
+                }
+            }
+            level0[j * n + i] = count as f32 / (SUB * SUB) as f32;
+        }
+    }
+    let mut levels = vec![level0];
+    let mut n = n;
+    while n > 1 {
+        let m = n / 2;
+        let prev = levels.last().map(Vec::as_slice).unwrap_or(&[]);
+        let mut next = vec![0.0f32; m * m];
+        for j in 0..m {
+            for i in 0..m {
+                let at = |x: usize, y: usize| prev[y * n + x];
+                next[j * m + i] = 0.25
+                    * (at(2 * i, 2 * j)
+                        + at(2 * i + 1, 2 * j)
+                        + at(2 * i, 2 * j + 1)
+                        + at(2 * i + 1, 2 * j + 1));
+            }
+        }
+        levels.push(next);
+        n = m;
+    }
+    levels
+}
+
+/// IEEE binary16 bits of `v` (round to nearest even; values here are in [0, 1]).
+pub fn f16_bits(v: f32) -> u16 {
+    let x = v.to_bits();
+    let sign = ((x >> 16) & 0x8000) as u16;
+    let exp = ((x >> 23) & 0xff) as i32;
+    let mant = x & 0x7f_ffff;
+    if exp == 0xff {
+        return sign | 0x7c00 | if mant != 0 { 0x200 } else { 0 };
+    }
+    let e = exp - 127 + 15;
+    if e >= 0x1f {
+        return sign | 0x7c00;
+    }
+    if e <= 0 {
+        if e < -10 {
+            return sign;
+        }
+        // Subnormal: shift the mantissa (with its implicit 1) into place, rounding.
+        let m = mant | 0x80_0000;
+        let shift = (14 - e) as u32;
+        let half = 1u32 << (shift - 1);
+        let rest = m & ((1u32 << shift) - 1);
+        let mut h = m >> shift;
+        if rest > half || (rest == half && h & 1 == 1) {
+            h += 1;
+        }
+        return sign | h as u16;
+    }
+    let mut h = ((e as u32) << 10) | (mant >> 13);
+    let rest = mant & 0x1fff;
+    if rest > 0x1000 || (rest == 0x1000 && h & 1 == 1) {
+        h += 1;
+    }
+    sign | h as u16
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn coverage_integrates_to_the_cone_solid_angle_on_every_level() {
+        let (size, alpha) = (64u32, 0.3f32);
+        let levels = coverage_mips(size, alpha);
+        assert_eq!(levels.len(), 7);
+        let want = std::f32::consts::TAU * (1.0 - alpha.cos());
+        // Solid angle of a texel at face coords (s, t) of width w: w² / (1+s²+t²)^1.5.
+        let n = size as usize;
+        let w = 2.0 / size as f32;
+        let mut got = 0.0;
+        for j in 0..n {
+            for i in 0..n {
+                let s = (i as f32 + 0.5) * w - 1.0;
+                let t = (j as f32 + 0.5) * w - 1.0;
+                got += levels[0][j * n + i] * w * w / (1.0 + s * s + t * t).powf(1.5);
+            }
+        }
+        assert!((got - want).abs() < 0.01 * want, "{got} vs {want}");
+        // Box mips keep the mean.
+        let mean = |l: &Vec<f32>| l.iter().sum::<f32>() / l.len() as f32;
+        for l in &levels[1..] {
+            assert!((mean(l) - mean(&levels[0])).abs() < 1e-6);
+        }
+    }
+
+    #[test]
+    fn half_floats_round_trip_known_values() {
+        assert_eq!(f16_bits(1.0), 0x3c00);
+        assert_eq!(f16_bits(0.5), 0x3800);
+        assert_eq!(f16_bits(0.0), 0);
+        assert_eq!(f16_bits(0.25 + 1.0 / 4096.0), 0x3401); // one step above 0.25
+        assert_eq!(f16_bits(0.25 + 1.0 / 8192.0), 0x3400); // halfway: rounds to even
+        assert_eq!(f16_bits(6.0e-8), 0x0001); // smallest subnormal
+        assert_eq!(f16_bits(65536.0), 0x7c00);
+    }
+}
