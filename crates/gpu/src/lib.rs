@@ -19,6 +19,7 @@
 //! # Ok(()) }
 //! ```
 
+pub mod binding;
 mod context;
 mod error;
 pub mod frame;

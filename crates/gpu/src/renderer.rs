@@ -6,6 +6,7 @@ use bytemuck::{Pod, Zeroable};
 use caustics_scene::Vec3;
 use wgpu::util::DeviceExt;
 
+use crate::binding::{entry, storage_entry};
 use crate::frame::Frame;
 use crate::gbuffer::{GBuffer, GBufferPass, LightProjection, LightView, ShadowMap};
 use crate::profiling::{FrameMode, PassProfiler};
@@ -110,43 +111,14 @@ pub struct Renderer {
     bytes: u64,
 }
 
-fn layout_entry(
-    binding: u32,
-    visibility: wgpu::ShaderStages,
-    ty: wgpu::BindingType,
-) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility,
-        ty,
-        count: None,
-    }
-}
-
 fn texture_entry(binding: u32, sample_type: wgpu::TextureSampleType) -> wgpu::BindGroupLayoutEntry {
-    layout_entry(
+    entry(
         binding,
         wgpu::ShaderStages::VERTEX_FRAGMENT | wgpu::ShaderStages::COMPUTE,
         wgpu::BindingType::Texture {
             sample_type,
             view_dimension: wgpu::TextureViewDimension::D2,
             multisampled: false,
-        },
-    )
-}
-
-fn storage_entry(
-    binding: u32,
-    read_only: bool,
-    visibility: wgpu::ShaderStages,
-) -> wgpu::BindGroupLayoutEntry {
-    layout_entry(
-        binding,
-        visibility,
-        wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only },
-            has_dynamic_offset: false,
-            min_binding_size: None,
         },
     )
 }
@@ -200,7 +172,7 @@ impl Renderer {
         let frame_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("frame (group 0)"),
             entries: &[
-                layout_entry(
+                entry(
                     0,
                     all,
                     wgpu::BindingType::Buffer {
@@ -301,7 +273,7 @@ impl Renderer {
                 texture_entry(1, wgpu::TextureSampleType::Float { filterable: false }),
                 texture_entry(2, wgpu::TextureSampleType::Uint),
                 storage_entry(3, true, frag),
-                layout_entry(
+                entry(
                     4,
                     frag,
                     wgpu::BindingType::Buffer {
@@ -310,7 +282,7 @@ impl Renderer {
                         min_binding_size: None,
                     },
                 ),
-                layout_entry(
+                entry(
                     5,
                     frag,
                     wgpu::BindingType::Texture {
@@ -319,7 +291,7 @@ impl Renderer {
                         multisampled: false,
                     },
                 ),
-                layout_entry(
+                entry(
                     6,
                     frag,
                     wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Comparison),

@@ -53,6 +53,7 @@ pub mod light_map;
 pub mod sampling;
 
 use bytemuck::{Pod, Zeroable};
+use caustics_gpu::binding::entry;
 use caustics_gpu::textures::{additive_hdr_target, load_attachment};
 use caustics_gpu::wgpu::{self, util::DeviceExt};
 use caustics_gpu::{CountedPipeline, Frame, GpuContext, Renderer, pass_desc, shader};
@@ -400,19 +401,6 @@ fn gpu_samples(samples: &[PointSample], epsilon_scale: f32) -> Vec<GpuSample> {
             }
         })
         .collect()
-}
-
-fn entry(
-    binding: u32,
-    visibility: wgpu::ShaderStages,
-    ty: wgpu::BindingType,
-) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility,
-        ty,
-        count: None,
-    }
 }
 
 fn buffer_ty(ty: wgpu::BufferBindingType) -> wgpu::BindingType {

@@ -24,6 +24,7 @@
 mod sources;
 
 use bytemuck::{Pod, Zeroable};
+use caustics_gpu::binding::{buffers_bind_group, storage_entry, uniform_entry};
 use caustics_gpu::textures::{additive_hdr_target, load_attachment};
 use caustics_gpu::wgpu::{self, util::DeviceExt};
 use caustics_gpu::{CountedPipeline, Frame, GpuContext, Renderer, pass_desc, shader};
@@ -258,57 +259,6 @@ fn create(
     Ok(Box::new(Wavefront::new(ctx, renderer, &p)?))
 }
 
-fn storage(
-    binding: u32,
-    read_only: bool,
-    visibility: wgpu::ShaderStages,
-) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    }
-}
-
-fn uniform(binding: u32, visibility: wgpu::ShaderStages) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Uniform,
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    }
-}
-
-fn bind(
-    device: &wgpu::Device,
-    label: &str,
-    layout: &wgpu::BindGroupLayout,
-    buffers: &[&wgpu::Buffer],
-) -> wgpu::BindGroup {
-    let entries: Vec<_> = buffers
-        .iter()
-        .enumerate()
-        .map(|(i, b)| wgpu::BindGroupEntry {
-            binding: i as u32,
-            resource: b.as_entire_binding(),
-        })
-        .collect();
-    device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some(label),
-        layout,
-        entries: &entries,
-    })
-}
-
 impl Wavefront {
     /// Builds the wavefront of the scene's caustic generator and the three passes.
     pub fn new(
@@ -414,41 +364,45 @@ impl Wavefront {
         let cs = wgpu::ShaderStages::COMPUTE;
         let trace_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("wavefront trace"),
-            entries: &[uniform(0, cs), storage(1, true, cs), storage(2, false, cs)],
+            entries: &[
+                uniform_entry(0, cs),
+                storage_entry(1, true, cs),
+                storage_entry(2, false, cs),
+            ],
         });
         let classify_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("wavefront classify"),
             entries: &[
-                uniform(0, cs),
-                storage(1, true, cs),
-                storage(2, true, cs),
-                storage(3, false, cs),
-                storage(4, false, cs),
+                uniform_entry(0, cs),
+                storage_entry(1, true, cs),
+                storage_entry(2, true, cs),
+                storage_entry(3, false, cs),
+                storage_entry(4, false, cs),
             ],
         });
         let vf = wgpu::ShaderStages::VERTEX_FRAGMENT;
         let splat_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("wavefront splat"),
             entries: &[
-                uniform(0, vf),
-                storage(1, true, vf),
-                storage(2, true, vf),
-                storage(3, true, vf),
+                uniform_entry(0, vf),
+                storage_entry(1, true, vf),
+                storage_entry(2, true, vf),
+                storage_entry(3, true, vf),
             ],
         });
-        let trace_bind = bind(
+        let trace_bind = buffers_bind_group(
             device,
             "wavefront trace",
             &trace_layout,
             &[&trace_params, &sources, &traced],
         );
-        let classify_bind = bind(
+        let classify_bind = buffers_bind_group(
             device,
             "wavefront classify",
             &classify_layout,
             &[&trace_params, &traced, &triangles, &keep, &counters],
         );
-        let splat_bind = bind(
+        let splat_bind = buffers_bind_group(
             device,
             "wavefront splat",
             &splat_layout,
