@@ -1,0 +1,1 @@
+//! Beam tracing shared by static-grid and adaptive-beams (Liktor & Dachsbacher 2010/2011): light-space projected grid, GPU refinement by a split oracle, prism and tight hulls, scan-plane inscattering and surface caustics.

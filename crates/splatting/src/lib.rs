@@ -1,0 +1,1 @@
+//! Caustic-mapping baseline: photon hits splatted with a fixed kernel.
