@@ -1,0 +1,145 @@
+// Approximate ray tracing against a distance impostor (Szirmay-Kalos, Aszódi, Lazányi,
+// Premecz 2005, "Approximate ray-tracing on the GPU with distance impostors"): the
+// surface is the set of points p with |p - c| = d(p - c), where d is the distance
+// stored in direction p - c of a cube map around the centre c. A ray is marched in
+// fixed steps until f(t) = |p(t) - c| - d(p(t) - c) changes sign, then refined by
+// secant steps. Exact for surfaces that are star-shaped around c (a sphere from its
+// centre, a heightfield from a point below it); approximate otherwise, which is the
+// method's (and the papers') stated limitation.
+//
+// Methods bind the impostor's `normal_distance` (texture_2d_array<f32>, 6 layers in
+// the order +X, -X, +Y, -Y, +Z, -Z) and `object` (texture_2d_array<u32>) textures and
+// pass them to these functions.
+
+// Face and texel coordinates of a direction: the usual cube-map convention
+// (Vulkan spec, "Cube Map Face Selection"). Returns (u, v in [0, 1], face).
+fn impostor_face_uv(d: vec3<f32>) -> vec3<f32> {
+    let a = abs(d);
+    var face: f32;
+    var sc: f32;
+    var tc: f32;
+    var ma: f32;
+    if a.x >= a.y && a.x >= a.z {
+        ma = a.x;
+        if d.x > 0.0 { face = 0.0; sc = -d.z; tc = -d.y; } else { face = 1.0; sc = d.z; tc = -d.y; }
+    } else if a.y >= a.z {
+        ma = a.y;
+        if d.y > 0.0 { face = 2.0; sc = d.x; tc = d.z; } else { face = 3.0; sc = d.x; tc = -d.z; }
+    } else {
+        ma = a.z;
+        if d.z > 0.0 { face = 4.0; sc = d.x; tc = -d.y; } else { face = 5.0; sc = -d.x; tc = -d.y; }
+    }
+    let m = max(ma, 1e-30);
+    return vec3<f32>(0.5 * (sc / m + 1.0), 0.5 * (tc / m + 1.0), face);
+}
+
+// Normal (xyz) and distance (w, 0 where no surface) in direction `d`, bilinear within
+// the face. Texels with no surface are not blended into ones with a surface (a
+// silhouette stays a silhouette): if any of the four is empty, the nearest is taken.
+fn impostor_fetch(map: texture_2d_array<f32>, d: vec3<f32>) -> vec4<f32> {
+    let res = vec2<f32>(textureDimensions(map));
+    let fuv = impostor_face_uv(d);
+    let layer = i32(fuv.z);
+    let st = fuv.xy * res - 0.5;
+    let base = floor(st);
+    let f = st - base;
+    let hi = vec2<i32>(res) - 1;
+    let p00 = clamp(vec2<i32>(base), vec2<i32>(0), hi);
+    let p11 = clamp(vec2<i32>(base) + 1, vec2<i32>(0), hi);
+    let t00 = textureLoad(map, p00, layer, 0);
+    let t10 = textureLoad(map, vec2<i32>(p11.x, p00.y), layer, 0);
+    let t01 = textureLoad(map, vec2<i32>(p00.x, p11.y), layer, 0);
+    let t11 = textureLoad(map, p11, layer, 0);
+    if min(min(t00.w, t10.w), min(t01.w, t11.w)) <= 0.0 {
+        let nearest = clamp(vec2<i32>(floor(fuv.xy * res)), vec2<i32>(0), hi);
+        return textureLoad(map, nearest, layer, 0);
+    }
+    return mix(mix(t00, t10, f.x), mix(t01, t11, f.x), f.y);
+}
+
+// Object index stored in direction `d` (nearest texel).
+fn impostor_object(ids: texture_2d_array<u32>, d: vec3<f32>) -> u32 {
+    let res = vec2<f32>(textureDimensions(ids));
+    let fuv = impostor_face_uv(d);
+    let p = clamp(vec2<i32>(floor(fuv.xy * res)), vec2<i32>(0), vec2<i32>(res) - 1);
+    return textureLoad(ids, p, i32(fuv.z), 0).x;
+}
+
+struct ImpostorHit {
+    found: bool,
+    // Ray parameter of the hit (m along a unit direction).
+    t: f32,
+    position: vec3<f32>,
+    // Unit normal as stored (outward for closed meshes).
+    normal: vec3<f32>,
+}
+
+// f(t) of the search; +1e30 where the cube map stores no surface (never a crossing).
+fn impostor_f(map: texture_2d_array<f32>, center: vec3<f32>, p: vec3<f32>) -> f32 {
+    let l = p - center;
+    let s = impostor_fetch(map, l);
+    if s.w <= 0.0 {
+        return 1e30;
+    }
+    return length(l) - s.w;
+}
+
+const IMPOSTOR_LINEAR_STEPS: u32 = 32u;
+const IMPOSTOR_SECANT_STEPS: u32 = 8u;
+
+// First crossing of the ray o + t·d (|d| = 1) with the impostor's surface for t in
+// (t_min, t_max]. `tolerance` (m) bounds |f| at the accepted hit: a sign change that
+// secant steps cannot close is a jump across a depth discontinuity, not a surface.
+fn impostor_trace(
+    map: texture_2d_array<f32>,
+    center: vec3<f32>,
+    o: vec3<f32>,
+    d: vec3<f32>,
+    t_min: f32,
+    t_max: f32,
+    tolerance: f32,
+) -> ImpostorHit {
+    var hit: ImpostorHit;
+    hit.found = false;
+    var t_prev = t_min;
+    var f_prev = impostor_f(map, center, o + d * t_min);
+    let dt = (t_max - t_min) / f32(IMPOSTOR_LINEAR_STEPS);
+    for (var i = 1u; i <= IMPOSTOR_LINEAR_STEPS; i++) {
+        let t = t_min + dt * f32(i);
+        let f = impostor_f(map, center, o + d * t);
+        let crossing = (f_prev < 0.0) != (f < 0.0);
+        if crossing && abs(f) < 1e29 && abs(f_prev) < 1e29 {
+            // Secant refinement inside [t_prev, t].
+            var ta = t_prev;
+            var fa = f_prev;
+            var tb = t;
+            var fb = f;
+            var tm = t;
+            var fm = f;
+            for (var k = 0u; k < IMPOSTOR_SECANT_STEPS; k++) {
+                tm = ta + (tb - ta) * fa / (fa - fb);
+                fm = impostor_f(map, center, o + d * tm);
+                if abs(fm) > 1e29 {
+                    break;
+                }
+                if (fm < 0.0) == (fa < 0.0) {
+                    ta = tm;
+                    fa = fm;
+                } else {
+                    tb = tm;
+                    fb = fm;
+                }
+            }
+            if abs(fm) <= tolerance {
+                hit.found = true;
+                hit.t = tm;
+                hit.position = o + d * tm;
+                hit.normal = normalize(impostor_fetch(map, hit.position - center).xyz);
+                return hit;
+            }
+        }
+        t_prev = t;
+        f_prev = f;
+    }
+    return hit;
+}
