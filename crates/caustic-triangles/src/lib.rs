@@ -38,6 +38,9 @@ use caustics_scene::Scene;
 use photon_hits::{CausticMap, PhotonHitConfig, PhotonHits};
 use serde::{Deserialize, Serialize};
 
+/// The shared photon-hit crate, for callers that read hits or the cube map back.
+pub use photon_hits;
+
 const GRID_WGSL: &str = include_str!("grid.wgsl");
 const AREAS_WGSL: &str = include_str!("areas.wgsl");
 const TRIANGLES_WGSL: &str = include_str!("triangles.wgsl");
