@@ -78,7 +78,7 @@ impl Default for CausticTrianglesParams {
             distance_map_size: 256,
             distance_test: true,
             distance_tolerance: 0.05,
-            max_stretch: 100.0,
+            max_stretch: 1000.0,
         }
     }
 }

@@ -57,6 +57,32 @@ fn refract_through(d: vec3<f32>, n_out: vec3<f32>, ior: f32) -> vec4<f32> {
     return vec4<f32>(normalize(t), 1.0 - f);
 }
 
+// The receiver along o + t·d: the distance-map search over ranges that grow fourfold
+// (reach/64, /16, /4, 1, 2 × the reach). `impostor_trace` marches even steps over its
+// range; over the whole reach at once, a receiver a few centimetres from the start
+// falls inside the first step, and is missed when that step begins where the map
+// stores no surface (a ray leaving the ring's wall above the map's centre, whose
+// direction from the centre sees no receiver yet). Ranges that grow with the distance
+// travelled keep the steps proportional to it.
+fn trace_receiver(o: vec3<f32>, d: vec3<f32>) -> ImpostorHit {
+    let c = tu.center.xyz;
+    let reach = tu.center.w;
+    let tolerance = tu.view.w * reach;
+    var t0 = 1e-4 * reach;
+    var t1 = reach / 64.0;
+    var hit: ImpostorHit;
+    hit.found = false;
+    for (var k = 0u; k < 5u; k++) {
+        hit = impostor_trace(receiver_map, c, o, d, t0, t1, tolerance);
+        if hit.found {
+            return hit;
+        }
+        t0 = t1;
+        t1 = min(4.0 * t1, 2.0 * reach);
+    }
+    return hit;
+}
+
 fn store_invalid(i: u32, why: u32) {
     var h: PhotonHit;
     h.ids = vec4<u32>(NONE, 0u, why, 0u);
@@ -155,8 +181,7 @@ fn trace_photons(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     // The receiver: the distance map of the diffuse objects around the centre.
     let c = tu.center.xyz;
-    let reach = tu.center.w;
-    let hit = impostor_trace(receiver_map, c, p, d, 1e-4 * reach, 2.0 * reach, tu.view.w * reach);
+    let hit = trace_receiver(p, d);
     if !hit.found {
         store_invalid(i, HIT_NO_RECEIVER);
         return;
