@@ -7,6 +7,8 @@ pub fn methods() -> Vec<MethodInfo> {
     vec![
         wavefront::info(),
         pinhole::info(),
+        static_grid::info(),
+        adaptive_beams::info(),
         caustic_triangles::info(),
         splatting::info(),
     ]
