@@ -250,8 +250,8 @@ fn splatting_conserves_the_photon_flux_for_every_kernel() {
         let hits: Vec<PhotonHit> = m.photon_hits().read_hits(&ctx).expect("hits");
         let mut photons = [0.0f64; 3];
         for h in hits.iter().filter(|h| h.valid()) {
-            for c in 0..3 {
-                photons[c] += h.flux[c] as f64;
+            for (sum, flux) in photons.iter_mut().zip(h.flux) {
+                *sum += flux as f64;
             }
         }
         assert!(photons[1] > 0.5, "little flux: {photons:?}");
