@@ -24,6 +24,25 @@
 //!
 //! The photon hit image is one light view fitted to the generator (a cube for a light
 //! inside it); triangles do not cross between the faces of a cube view.
+//!
+//! ```no_run
+//! use caustics_gpu::{AdapterChoice, FrameMode, GpuContext, GpuScene, PassProfiler, Renderer};
+//! use caustics_method::CausticsMethod;
+//! use caustic_triangles::{CausticTriangles, CausticTrianglesParams};
+//! # fn main() -> Result<(), Box<dyn std::error::Error>> {
+//! let ctx = GpuContext::new(&AdapterChoice::from_flag_or_env(None))?;
+//! let scene = caustics_scene::Scene::load(&caustics_scene::resolve("sphere_on_plane")?)?;
+//! let gpu_scene = GpuScene::upload(&ctx, scene.into(), Default::default())?;
+//! let renderer = Renderer::new(&ctx, gpu_scene, Default::default())?;
+//! let mut method = CausticTriangles::new(&ctx, &renderer, &CausticTrianglesParams::default())?;
+//! let mut profiler = PassProfiler::new(&ctx, 1);
+//! let mut frame = renderer.begin_frame(&mut profiler, FrameMode::Timed)?;
+//! method.record(&mut frame)?; // adds ρ/π · E into renderer.targets().surface
+//! frame.submit(&ctx)?;
+//! println!("{:?}", method.counters(&ctx)?);
+//! # Ok(())
+//! # }
+//! ```
 
 use bytemuck::{Pod, Zeroable};
 use caustics_gpu::binding::{buffers_bind_group, storage_entry, uniform_entry};
