@@ -202,6 +202,58 @@ fn flat_refractor_vertices_carry_the_analytic_irradiance() {
     assert!(worst_px < 0.01, "worst pixel radiance error {worst_px}");
 }
 
+#[test]
+fn flat_mirror_vertices_carry_the_reflected_irradiance() {
+    // A 45° mirror 1 m above the floor turns a light travelling along +x straight down:
+    // the beam keeps its cross-section, so E_floor = R · E on every interior vertex.
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let (irradiance, reflectance) = ([1.0f64, 2.0, 0.5], [0.9f64, 0.8, 0.7]);
+    let scene = serde_json::json!({
+        "name": "flat_mirror",
+        "description": "a 45° mirror over a floor: the reflection check of the photon-hit methods",
+        "camera": {"eye": [0, 0.5, 2], "target": [0, 0, 0], "up": [0, 1, 0], "fov_y_deg": 50, "width": 64, "height": 48},
+        "lights": [{"type": "directional", "direction": [1, 0, 0], "irradiance": irradiance}],
+        "materials": {
+            "mirror": {"type": "mirror", "reflectance": reflectance},
+            "floor": {"type": "diffuse", "albedo": [0.8, 0.8, 0.8]}
+        },
+        "objects": [
+            {"shape": {"type": "quad", "center": [0, 1, 0], "normal": [-1, -1, 0], "size": [0.5, 0.5]}, "material": "mirror"},
+            {"shape": {"type": "quad", "center": [0, 0, 0], "normal": [0, 1, 0], "size": [6, 6]}, "material": "floor"}
+        ]
+    });
+    let path = write_scene(tmp.path(), "flat_mirror", &scene);
+    let (ctx, renderer) = renderer(&path);
+    let params = CausticTrianglesParams {
+        resolution: 40,
+        cube_size: 256,
+        distance_map_size: 512,
+        ..Default::default()
+    };
+    let mut m = CausticTriangles::new(&ctx, &renderer, &params).expect("method");
+    one_frame(&ctx, &renderer, &mut m);
+    let hits = m.photon_hits().read_hits(&ctx).expect("hits");
+    let e_v = m.read_vertex_irradiance(&ctx).expect("vertex irradiance");
+    let n = params.resolution as usize;
+    let valid = |x: usize, y: usize| hits[y * n + x].valid();
+    let (mut checked, mut worst) = (0, 0.0f64);
+    for y in 1..n - 1 {
+        for x in 1..n - 1 {
+            if !(y - 1..=y + 1).all(|j| (x - 1..=x + 1).all(|i| valid(i, j))) {
+                continue;
+            }
+            for c in 0..3 {
+                let want = reflectance[c] * irradiance[c];
+                worst = worst.max((e_v[y * n + x][c] as f64 - want).abs() / want);
+            }
+            checked += 1;
+        }
+    }
+    eprintln!("flat mirror: {checked} interior vertices, worst relative error {worst:.2e}");
+    assert!(checked > 300, "only {checked} interior vertices");
+    assert!(worst < 0.01, "worst vertex irradiance error {worst}");
+}
+
 /// Σ over the atlas texels of E × the texel's area on the floor plane y = `floor_y`.
 fn flux_on_floor(map: &CausticMap, atlas: &[f32], floor_y: f32) -> [f64; 3] {
     let s = map.size;
