@@ -634,7 +634,11 @@ fn main() -> Result<()> {
          paths; both methods follow one specular event per interface, so light reflected \
          by the glass or twice inside the ring is missing from both). Focus share: Σ image \
          / Σ reference over the pixels where the reference exceeds a quarter of its maximum. \
-         Cube map 6×512², distance maps 6×256², distance test on, unless stated.\n"
+         Cube map 6×512², distance maps 6×256², distance test on, unless stated. The \
+         references (cached, not committed): `caustics reference --scene \
+         results/umenhoffer-fig1/sphere_on_plane_128x96.json --time 90` (821M photons), \
+         `--scene results/umenhoffer-fig1/light_leak_128x96.json --time 60` (214M) and the \
+         ring's of `results/pinhole-fig4` (2.0G).\n"
     )?;
     writeln!(
         md,
