@@ -5,12 +5,12 @@
 // compute dispatches (decide, scan, emit, advance) with a deterministic prefix sum
 // instead of stream-out order, so the same beams land in the same slots every frame.
 
-@group(1) @binding(10) var<storage, read_write> candidates_a: array<Candidate>;
-@group(1) @binding(11) var<storage, read_write> candidates_b: array<Candidate>;
-@group(1) @binding(12) var<storage, read_write> actions: array<u32>;
-@group(1) @binding(13) var<storage, read_write> offsets: array<vec2<u32>>;
-@group(1) @binding(14) var<storage, read_write> control: array<atomic<u32>>;
-@group(1) @binding(15) var<storage, read_write> beams: array<Beam>;
+@group(1) @binding(6) var<storage, read_write> candidates_a: array<Candidate>;
+@group(1) @binding(7) var<storage, read_write> candidates_b: array<Candidate>;
+@group(1) @binding(8) var<storage, read_write> actions: array<u32>;
+@group(1) @binding(9) var<storage, read_write> offsets: array<vec2<u32>>;
+@group(1) @binding(10) var<storage, read_write> control: array<atomic<u32>>;
+@group(1) @binding(11) var<storage, read_write> beams: array<Beam>;
 // Indirect arguments: words 0..3 the dispatch over candidates, 4..7 the hull draw.
 // A group of its own, bound only to the kernels that write it (init_grid, advance,
 // finalize): a buffer cannot be storage and indirect in the same dispatch.
@@ -122,9 +122,10 @@ struct Corners {
 
 fn trace_corners(c: Candidate, family: u32) -> Corners {
     var k: Corners;
-    k.p[0] = trace_path(c.uv01.xy, family);
-    k.p[1] = trace_path(c.uv01.zw, family);
-    k.p[2] = trace_path(c.uv2_level.xy, family);
+    let uv = array<vec2<f32>, 3>(c.uv01.xy, c.uv01.zw, c.uv2_level.xy);
+    for (var i = 0u; i < 3u; i++) {
+        k.p[i] = trace_path(uv[i], family);
+    }
     return k;
 }
 
@@ -573,14 +574,14 @@ fn emit(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     var slot = atomicLoad(&control[C_BEAM_BASE]) + off.y;
-    if (a & 1u) != 0u {
+    for (var family = 0u; family < 2u; family++) {
+        if (a & (1u << family)) == 0u {
+            continue;
+        }
         if slot < u.max_beams {
-            write_beam(slot, c, trace_corners(c, FAMILY_MAIN), level);
+            write_beam(slot, c, trace_corners(c, family), level);
         }
         slot += 1u;
-    }
-    if (a & 2u) != 0u && slot < u.max_beams {
-        write_beam(slot, c, trace_corners(c, FAMILY_REFLECTED), level);
     }
 }
 

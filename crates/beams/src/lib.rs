@@ -37,9 +37,7 @@ use bytemuck::{Pod, Zeroable};
 use caustics_gpu::binding::{
     buffer_binding, entry, storage_entry, texture_binding, texture_entry, uniform_entry,
 };
-use caustics_gpu::impostor::{
-    DistanceImpostor, IMPOSTOR_FORMAT, IMPOSTOR_TRACE_WGSL, ImpostorPass,
-};
+use caustics_gpu::impostor::{IMPOSTOR_TRACE_WGSL, ImpostorAtlas, ImpostorPass};
 use caustics_gpu::textures::{HDR_FORMAT, Target, additive_hdr_target, load_attachment};
 use caustics_gpu::wgpu::{self, util::DeviceExt};
 use caustics_gpu::{
@@ -244,7 +242,7 @@ pub struct BeamMethod {
     config: BeamConfig,
     light_gbuffer: GBuffer,
     impostor_pass: ImpostorPass,
-    impostors: Vec<DistanceImpostor>,
+    atlas: ImpostorAtlas,
     raw_surface: Target,
     control: wgpu::Buffer,
     control_init: wgpu::Buffer,
@@ -369,28 +367,6 @@ impl BeamMethod {
         let scene = &gpu_scene.scene;
         let light_gbuffer = renderer.gbuffer_pass().light_gbuffer(device, view);
         let impostor_pass = ImpostorPass::new(device);
-        let mut impostors = Vec::new();
-        let mut slot_uniforms = [SpecularSlot::default(); MAX_SPECULAR];
-        for (k, s) in slots.iter().enumerate() {
-            let imp = match s.center {
-                Some(c) => impostor_pass.impostor_around(
-                    device,
-                    gpu_scene,
-                    &[s.object],
-                    c,
-                    config.impostor_resolution,
-                )?,
-                None => impostor_pass.impostor(
-                    device,
-                    gpu_scene,
-                    &[s.object],
-                    config.impostor_resolution,
-                )?,
-            };
-            slot_uniforms[k] = s.uniform;
-            slot_uniforms[k].center_reach = imp.center.extend(imp.reach).to_array();
-            impostors.push(imp);
-        }
         let receivers: Vec<usize> = scene
             .objects
             .iter()
@@ -398,14 +374,24 @@ impl BeamMethod {
             .filter(|(_, o)| !scene.material(o).is_specular())
             .map(|(i, _)| i)
             .collect();
-        let specular_center = scene.specular_bounds().map_or(Vec3::ZERO, |b| b.center());
-        let receiver_impostor = impostor_pass.impostor_around(
-            device,
-            gpu_scene,
-            &receivers,
-            specular_center,
-            config.impostor_resolution,
-        )?;
+        let specular_center = scene.specular_bounds().map(|b| b.center());
+        // One atlas: the specular slots in order, then the receivers around the
+        // generators' centre (Umenhoffer's distance map of the environment).
+        let mut entries: Vec<(Vec<usize>, Option<Vec3>)> =
+            slots.iter().map(|s| (vec![s.object], s.center)).collect();
+        entries.push((receivers, specular_center));
+        let atlas = impostor_pass.atlas(device, gpu_scene, &entries, config.impostor_resolution)?;
+        let mut slot_uniforms = [SpecularSlot::default(); MAX_SPECULAR];
+        for (k, s) in slots.iter().enumerate() {
+            let e = &atlas.entries[k];
+            slot_uniforms[k] = s.uniform;
+            slot_uniforms[k].center_reach = e.center.extend(e.reach).to_array();
+        }
+        let receiver_entry = &atlas.entries[slots.len()];
+        let receivers_center_reach = receiver_entry
+            .center
+            .extend(receiver_entry.reach)
+            .to_array();
 
         let bounds = scene.bounds();
         let scene_reach = 2.0 * bounds.bounding_sphere_radius().max(1e-3);
@@ -461,10 +447,7 @@ impl BeamMethod {
             light_power: power.to_array(),
             sigma_t,
             sigma_s_g,
-            receivers: receiver_impostor
-                .center
-                .extend(receiver_impostor.reach)
-                .to_array(),
+            receivers: receivers_center_reach,
             specular: slot_uniforms,
             specular_count: slots.len() as u32,
             grid: config.grid,
@@ -516,16 +499,6 @@ impl BeamMethod {
             contents: bytemuck::cast_slice(&[0u32; CONTROL_WORDS]),
             usage: wgpu::BufferUsages::COPY_SRC,
         });
-        // Empty impostor slots read as "no surface anywhere".
-        let empty_impostor = Target::new(
-            device,
-            "empty impostor",
-            IMPOSTOR_FORMAT,
-            1,
-            1,
-            6,
-            wgpu::TextureUsages::empty(),
-        );
         let raw_surface = Target::new(
             device,
             "beam raw surface caustic",
@@ -554,11 +527,9 @@ impl BeamMethod {
             float_tex(2, d2),
             texture_entry(3, cs, wgpu::TextureSampleType::Uint, d2),
         ];
-        for b in 4..9 {
-            entries.push(float_tex(b, d2a));
-        }
-        entries.push(texture_entry(9, cs, wgpu::TextureSampleType::Uint, d2a));
-        for b in 10..16 {
+        entries.push(float_tex(4, d2a));
+        entries.push(texture_entry(5, cs, wgpu::TextureSampleType::Uint, d2a));
+        for b in 6..12 {
             entries.push(storage_entry(b, false, cs));
         }
         let generate_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -567,11 +538,6 @@ impl BeamMethod {
         });
         let tex = texture_binding;
         let buf = buffer_binding;
-        let slot_view = |k: usize| {
-            impostors
-                .get(k)
-                .map_or(&empty_impostor.view, |i| &i.normal_distance.view)
-        };
         let generate_bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("beam generate"),
             layout: &generate_layout,
@@ -580,18 +546,14 @@ impl BeamMethod {
                 tex(1, &light_gbuffer.position.view),
                 tex(2, &light_gbuffer.normal.view),
                 tex(3, &light_gbuffer.ids.view),
-                tex(4, slot_view(0)),
-                tex(5, slot_view(1)),
-                tex(6, slot_view(2)),
-                tex(7, slot_view(3)),
-                tex(8, &receiver_impostor.normal_distance.view),
-                tex(9, &receiver_impostor.object_ids.view),
-                buf(10, &candidates_a),
-                buf(11, &candidates_b),
-                buf(12, &actions),
-                buf(13, &offsets),
-                buf(14, &control),
-                buf(15, &beams),
+                tex(4, &atlas.normal_distance.view),
+                tex(5, &atlas.object_ids.view),
+                buf(6, &candidates_a),
+                buf(7, &candidates_b),
+                buf(8, &actions),
+                buf(9, &offsets),
+                buf(10, &control),
+                buf(11, &beams),
             ],
         });
         let args_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -739,8 +701,7 @@ impl BeamMethod {
             cache: None,
         });
 
-        let mut bytes = light_gbuffer.bytes() + raw_surface.bytes + empty_impostor.bytes;
-        bytes += impostors.iter().map(|i| i.bytes()).sum::<u64>() + receiver_impostor.bytes();
+        let mut bytes = light_gbuffer.bytes() + raw_surface.bytes + atlas.bytes();
         bytes += [
             &uniform_buffer,
             &candidates_a,
@@ -756,12 +717,11 @@ impl BeamMethod {
         .iter()
         .map(|b| b.size())
         .sum::<u64>();
-        impostors.push(receiver_impostor);
         Ok(Self {
             config: config.clone(),
             light_gbuffer,
             impostor_pass,
-            impostors,
+            atlas,
             raw_surface,
             control,
             control_init,
@@ -842,10 +802,8 @@ impl CausticsMethod for BeamMethod {
             scene,
             &self.light_gbuffer,
         )?;
-        for imp in &self.impostors {
-            self.impostor_pass
-                .record(frame, &self.pass_names.impostors, scene, imp)?;
-        }
+        self.impostor_pass
+            .record_atlas(frame, &self.pass_names.impostors, scene, &self.atlas)?;
         {
             let mut pass = frame.compute_pass(&self.pass_names.generate)?;
             pass.set_bind_group(0, renderer.frame_bind_group(), &[]);

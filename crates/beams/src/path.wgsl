@@ -7,12 +7,10 @@
 @group(1) @binding(1) var light_position: texture_2d<f32>;
 @group(1) @binding(2) var light_normal: texture_2d<f32>;
 @group(1) @binding(3) var light_ids: texture_2d<u32>;
-@group(1) @binding(4) var specular_map0: texture_2d_array<f32>;
-@group(1) @binding(5) var specular_map1: texture_2d_array<f32>;
-@group(1) @binding(6) var specular_map2: texture_2d_array<f32>;
-@group(1) @binding(7) var specular_map3: texture_2d_array<f32>;
-@group(1) @binding(8) var receiver_map: texture_2d_array<f32>;
-@group(1) @binding(9) var receiver_ids: texture_2d_array<u32>;
+// The impostor atlas: specular slot k in layers 6k..6k+6, the diffuse receivers
+// (around the generators' centre) after the last slot.
+@group(1) @binding(4) var impostor_map: texture_2d_array<f32>;
+@group(1) @binding(5) var impostor_ids: texture_2d_array<u32>;
 
 const MAX_SPECULAR_EVENTS: u32 = 4u;
 const FAMILY_MAIN: u32 = 0u;
@@ -104,15 +102,15 @@ fn specular_slot_of(object: u32) -> u32 {
     return NONE;
 }
 
+// One call site per query: WGSL inlines every call, and the search loop is large.
 fn trace_slot(k: u32, o: vec3<f32>, d: vec3<f32>, t_max: f32) -> ImpostorHit {
-    let c = u.specular[k].center_reach.xyz;
-    let tol = u.impostor_tolerance * u.specular[k].center_reach.w;
-    switch k {
-        case 0u: { return impostor_trace(specular_map0, c, o, d, 1e-4, t_max, tol); }
-        case 1u: { return impostor_trace(specular_map1, c, o, d, 1e-4, t_max, tol); }
-        case 2u: { return impostor_trace(specular_map2, c, o, d, 1e-4, t_max, tol); }
-        default: { return impostor_trace(specular_map3, c, o, d, 1e-4, t_max, tol); }
-    }
+    let s = u.specular[k];
+    return impostor_trace_at(impostor_map, i32(6u * k), s.center_reach.xyz, o, d, 1e-4, t_max,
+                             u.impostor_tolerance * s.center_reach.w);
+}
+
+fn receiver_layer() -> i32 {
+    return i32(6u * u.specular_count);
 }
 
 fn extinction(length_m: f32) -> vec3<f32> {
@@ -223,8 +221,8 @@ fn trace_path(uv: vec2<f32>, family: u32) -> PathEnd {
             }
         }
         // The receiver this edge would land on, then any specular object before it.
-        let r = impostor_trace(receiver_map, u.receivers.xyz, p, d, 1e-4,
-                               2.0 * u.scene_reach, u.impostor_tolerance * u.receivers.w);
+        let r = impostor_trace_at(impostor_map, receiver_layer(), u.receivers.xyz, p, d, 1e-4,
+                                  2.0 * u.scene_reach, u.impostor_tolerance * u.receivers.w);
         var t_receiver = u.scene_reach;
         if r.found {
             t_receiver = r.t;
@@ -251,7 +249,7 @@ fn trace_path(uv: vec2<f32>, family: u32) -> PathEnd {
             e.weight = w;
             e.signature = sig;
             e.t_end = t_receiver;
-            e.end_object = select(NONE, impostor_object(receiver_ids, r.position - u.receivers.xyz), r.found);
+            e.end_object = select(NONE, impostor_object_at(impostor_ids, receiver_layer(), r.position - u.receivers.xyz), r.found);
             return e;
         }
         w *= extinction(best.t);

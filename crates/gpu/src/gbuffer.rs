@@ -174,7 +174,8 @@ impl LightView {
                     lo = lo.min(q);
                     hi = hi.max(q);
                 }
-                let half = 0.5 * (hi.x - lo.x).max(hi.y - lo.y) * 1.01 + 1e-4;
+                // No margin: grid corners on the border of the view land on the generators' edges.
+                let half = 0.5 * (hi.x - lo.x).max(hi.y - lo.y) * (1.0 + 1e-5) + 1e-6;
                 let mid = 0.5 * (lo + hi);
                 let depth = (hi.z - lo.z).max(1e-3);
                 // The eye sits one depth before the nearest point, on the centre line.
@@ -210,7 +211,7 @@ impl LightView {
                     near = near.min(z);
                     far = far.max(v.length());
                 }
-                let fov = 2.0 * (tan_max * 1.01 + 1e-4).atan();
+                let fov = 2.0 * (tan_max * (1.0 + 1e-5) + 1e-6).atan();
                 if fov >= std::f32::consts::PI * 0.95 {
                     return None;
                 }

@@ -198,51 +198,8 @@ impl ImpostorPass {
         if resolution == 0 {
             return Err(GpuError::Invalid("distance impostor resolution 0".into()));
         }
-        let mut reach = 0.0f32;
-        for i in 0..8 {
-            let corner = Vec3::new(
-                if i & 1 == 0 {
-                    bounds.min.x
-                } else {
-                    bounds.max.x
-                },
-                if i & 2 == 0 {
-                    bounds.min.y
-                } else {
-                    bounds.max.y
-                },
-                if i & 4 == 0 {
-                    bounds.min.z
-                } else {
-                    bounds.max.z
-                },
-            );
-            reach = reach.max((corner - center).length());
-        }
-        let far = reach * 1.01 + 1e-3;
-        let near = (far * 1e-5).max(1e-5);
-        let views = (0..6)
-            .map(|face| {
-                let uniform = ImpostorView {
-                    view_proj: face_view_proj(face, center, near, far).to_cols_array_2d(),
-                    center: center.extend(1.0).to_array(),
-                };
-                let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some("impostor view"),
-                    contents: bytemuck::bytes_of(&uniform),
-                    usage: wgpu::BufferUsages::UNIFORM,
-                });
-                let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some("impostor view"),
-                    layout: &self.layout,
-                    entries: &[wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: buffer.as_entire_binding(),
-                    }],
-                });
-                (buffer, bind)
-            })
-            .collect();
+        let reach = reach_from(&bounds, center);
+        let views = self.face_binds(device, center, reach);
         let none = wgpu::TextureUsages::empty();
         Ok(DistanceImpostor {
             normal_distance: Target::new(
@@ -290,51 +247,245 @@ impl ImpostorPass {
         impostor: &DistanceImpostor,
     ) -> Result<(), GpuError> {
         for (face, (_, bind)) in impostor.views.iter().enumerate() {
-            let clear = |view| {
-                Some(wgpu::RenderPassColorAttachment {
-                    view,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                        store: wgpu::StoreOp::Store,
-                    },
-                })
-            };
-            let attachments = [
-                clear(&impostor.normal_distance.layer_views[face]),
-                clear(&impostor.object_ids.layer_views[face]),
-            ];
-            let desc = wgpu::RenderPassDescriptor {
-                label: None,
-                color_attachments: &attachments,
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &impostor.depth.layer_views[face],
-                    depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(1.0),
-                        store: wgpu::StoreOp::Discard,
-                    }),
-                    stencil_ops: None,
-                }),
-                timestamp_writes: None,
-                occlusion_query_set: None,
-                multiview_mask: None,
-            };
-            let mut pass = frame.render_pass(name, desc)?;
-            pass.set_pipeline(&self.pipeline);
-            pass.set_bind_group(0, bind, &[]);
-            pass.set_vertex_buffer(0, scene.vertex_buffer.slice(..));
-            pass.set_index_buffer(scene.index_buffer.slice(..), wgpu::IndexFormat::Uint32);
-            for &o in &impostor.objects {
-                let draw = scene.draws[o];
-                pass.draw_indexed(
-                    draw.first_index..draw.first_index + draw.index_count,
-                    0,
-                    0..1,
-                );
+            self.draw_face(
+                frame,
+                name,
+                scene,
+                &impostor.objects,
+                bind,
+                [
+                    &impostor.normal_distance.layer_views[face],
+                    &impostor.object_ids.layer_views[face],
+                ],
+                &impostor.depth.layer_views[face],
+            )?;
+        }
+        Ok(())
+    }
+
+    /// Allocates an atlas of impostors, each of `objects` around `center` (None: the
+    /// centre of their bounds), six layers each, in one pair of textures: a shader
+    /// then traces any of them through one binding and one call site
+    /// (`impostor_trace_at` with `6 × index` as the first layer).
+    pub fn atlas(
+        &self,
+        device: &wgpu::Device,
+        scene: &GpuScene,
+        entries: &[(Vec<usize>, Option<Vec3>)],
+        resolution: u32,
+    ) -> Result<ImpostorAtlas, GpuError> {
+        if entries.is_empty() || resolution == 0 {
+            return Err(GpuError::Invalid(
+                "impostor atlas of no entries or resolution 0".into(),
+            ));
+        }
+        let mut out = Vec::new();
+        for (objects, center) in entries {
+            let bounds = objects_bounds(scene, objects).ok_or_else(|| {
+                GpuError::Invalid("atlas entry: distance impostor of no objects".into())
+            })?;
+            let center = center.unwrap_or_else(|| bounds.center());
+            let reach = reach_from(&bounds, center);
+            out.push(AtlasEntry {
+                objects: objects.clone(),
+                center,
+                reach,
+                views: self.face_binds(device, center, reach),
+            });
+        }
+        let layers = 6 * entries.len() as u32;
+        let none = wgpu::TextureUsages::empty();
+        let target = |label, format| {
+            Target::new(device, label, format, resolution, resolution, layers, none)
+        };
+        Ok(ImpostorAtlas {
+            normal_distance: target("impostor atlas normal+distance", IMPOSTOR_FORMAT),
+            object_ids: target("impostor atlas object", IMPOSTOR_IDS_FORMAT),
+            depth: Target::new(
+                device,
+                "impostor atlas depth",
+                DEPTH_FORMAT,
+                resolution,
+                resolution,
+                1,
+                none,
+            ),
+            entries: out,
+            resolution,
+        })
+    }
+
+    /// Records every face of every impostor of `atlas` (profiled passes named `name`).
+    pub fn record_atlas(
+        &self,
+        frame: &mut Frame<'_>,
+        name: &str,
+        scene: &GpuScene,
+        atlas: &ImpostorAtlas,
+    ) -> Result<(), GpuError> {
+        for (k, entry) in atlas.entries.iter().enumerate() {
+            for (face, (_, bind)) in entry.views.iter().enumerate() {
+                let layer = 6 * k + face;
+                self.draw_face(
+                    frame,
+                    name,
+                    scene,
+                    &entry.objects,
+                    bind,
+                    [
+                        &atlas.normal_distance.layer_views[layer],
+                        &atlas.object_ids.layer_views[layer],
+                    ],
+                    &atlas.depth.view,
+                )?;
             }
         }
         Ok(())
+    }
+
+    /// Six per-face view uniforms around `center` reaching `reach`.
+    fn face_binds(
+        &self,
+        device: &wgpu::Device,
+        center: Vec3,
+        reach: f32,
+    ) -> Vec<(wgpu::Buffer, wgpu::BindGroup)> {
+        let far = reach * 1.01 + 1e-3;
+        let near = (far * 1e-5).max(1e-5);
+        (0..6)
+            .map(|face| {
+                let uniform = ImpostorView {
+                    view_proj: face_view_proj(face, center, near, far).to_cols_array_2d(),
+                    center: center.extend(1.0).to_array(),
+                };
+                let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("impostor view"),
+                    contents: bytemuck::bytes_of(&uniform),
+                    usage: wgpu::BufferUsages::UNIFORM,
+                });
+                let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("impostor view"),
+                    layout: &self.layout,
+                    entries: &[wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: buffer.as_entire_binding(),
+                    }],
+                });
+                (buffer, bind)
+            })
+            .collect()
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn draw_face(
+        &self,
+        frame: &mut Frame<'_>,
+        name: &str,
+        scene: &GpuScene,
+        objects: &[usize],
+        bind: &wgpu::BindGroup,
+        colors: [&wgpu::TextureView; 2],
+        depth: &wgpu::TextureView,
+    ) -> Result<(), GpuError> {
+        let clear = |view| {
+            Some(wgpu::RenderPassColorAttachment {
+                view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                    store: wgpu::StoreOp::Store,
+                },
+            })
+        };
+        let attachments = [clear(colors[0]), clear(colors[1])];
+        let desc = wgpu::RenderPassDescriptor {
+            label: None,
+            color_attachments: &attachments,
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: depth,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(1.0),
+                    store: wgpu::StoreOp::Discard,
+                }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        };
+        let mut pass = frame.render_pass(name, desc)?;
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, bind, &[]);
+        pass.set_vertex_buffer(0, scene.vertex_buffer.slice(..));
+        pass.set_index_buffer(scene.index_buffer.slice(..), wgpu::IndexFormat::Uint32);
+        for &o in objects {
+            let draw = scene.draws[o];
+            pass.draw_indexed(
+                draw.first_index..draw.first_index + draw.index_count,
+                0,
+                0..1,
+            );
+        }
+        Ok(())
+    }
+}
+
+/// Distance from `center` to the farthest corner of `bounds`.
+fn reach_from(bounds: &Aabb, center: Vec3) -> f32 {
+    let mut reach = 0.0f32;
+    for i in 0..8 {
+        let corner = Vec3::new(
+            if i & 1 == 0 {
+                bounds.min.x
+            } else {
+                bounds.max.x
+            },
+            if i & 2 == 0 {
+                bounds.min.y
+            } else {
+                bounds.max.y
+            },
+            if i & 4 == 0 {
+                bounds.min.z
+            } else {
+                bounds.max.z
+            },
+        );
+        reach = reach.max((corner - center).length());
+    }
+    reach
+}
+
+/// One impostor of an [`ImpostorAtlas`].
+pub struct AtlasEntry {
+    /// Objects drawn.
+    pub objects: Vec<usize>,
+    /// Reference point (world, m).
+    pub center: Vec3,
+    /// Distance to the farthest corner of the objects' bounds (m).
+    pub reach: f32,
+    views: Vec<(wgpu::Buffer, wgpu::BindGroup)>,
+}
+
+/// Several distance impostors in one pair of 6·N-layer textures (entry k: layers
+/// 6k..6k+6), traced through one binding.
+pub struct ImpostorAtlas {
+    /// Normal and distance ([`IMPOSTOR_FORMAT`]).
+    pub normal_distance: Target,
+    /// Object index ([`IMPOSTOR_IDS_FORMAT`]).
+    pub object_ids: Target,
+    depth: Target,
+    /// The impostors, in layer order.
+    pub entries: Vec<AtlasEntry>,
+    /// Texels per face side.
+    pub resolution: u32,
+}
+
+impl ImpostorAtlas {
+    /// Bytes of GPU memory owned.
+    pub fn bytes(&self) -> u64 {
+        self.normal_distance.bytes + self.object_ids.bytes + self.depth.bytes
     }
 }
 

@@ -9,7 +9,9 @@
 //
 // Methods bind the impostor's `normal_distance` (texture_2d_array<f32>, 6 layers in
 // the order +X, -X, +Y, -Y, +Z, -Z) and `object` (texture_2d_array<u32>) textures and
-// pass them to these functions.
+// pass them to these functions. An atlas holds several impostors, one per 6 layers;
+// the `_at` variants take the first layer of one. (One call site per query keeps
+// shaders small: WGSL functions are inlined at every call.)
 
 // Face and texel coordinates of a direction: the usual cube-map convention
 // (Vulkan spec, "Cube Map Face Selection"). Returns (u, v in [0, 1], face).
@@ -37,9 +39,13 @@ fn impostor_face_uv(d: vec3<f32>) -> vec3<f32> {
 // the face. Texels with no surface are not blended into ones with a surface (a
 // silhouette stays a silhouette): if any of the four is empty, the nearest is taken.
 fn impostor_fetch(map: texture_2d_array<f32>, d: vec3<f32>) -> vec4<f32> {
+    return impostor_fetch_at(map, 0, d);
+}
+
+fn impostor_fetch_at(map: texture_2d_array<f32>, base_layer: i32, d: vec3<f32>) -> vec4<f32> {
     let res = vec2<f32>(textureDimensions(map));
     let fuv = impostor_face_uv(d);
-    let layer = i32(fuv.z);
+    let layer = base_layer + i32(fuv.z);
     let st = fuv.xy * res - 0.5;
     let base = floor(st);
     let f = st - base;
@@ -59,10 +65,14 @@ fn impostor_fetch(map: texture_2d_array<f32>, d: vec3<f32>) -> vec4<f32> {
 
 // Object index stored in direction `d` (nearest texel).
 fn impostor_object(ids: texture_2d_array<u32>, d: vec3<f32>) -> u32 {
+    return impostor_object_at(ids, 0, d);
+}
+
+fn impostor_object_at(ids: texture_2d_array<u32>, base_layer: i32, d: vec3<f32>) -> u32 {
     let res = vec2<f32>(textureDimensions(ids));
     let fuv = impostor_face_uv(d);
     let p = clamp(vec2<i32>(floor(fuv.xy * res)), vec2<i32>(0), vec2<i32>(res) - 1);
-    return textureLoad(ids, p, i32(fuv.z), 0).x;
+    return textureLoad(ids, p, base_layer + i32(fuv.z), 0).x;
 }
 
 struct ImpostorHit {
@@ -75,9 +85,9 @@ struct ImpostorHit {
 }
 
 // f(t) of the search; +1e30 where the cube map stores no surface (never a crossing).
-fn impostor_f(map: texture_2d_array<f32>, center: vec3<f32>, p: vec3<f32>) -> f32 {
+fn impostor_f(map: texture_2d_array<f32>, base_layer: i32, center: vec3<f32>, p: vec3<f32>) -> f32 {
     let l = p - center;
-    let s = impostor_fetch(map, l);
+    let s = impostor_fetch_at(map, base_layer, l);
     if s.w <= 0.0 {
         return 1e30;
     }
@@ -99,14 +109,28 @@ fn impostor_trace(
     t_max: f32,
     tolerance: f32,
 ) -> ImpostorHit {
+    return impostor_trace_at(map, 0, center, o, d, t_min, t_max, tolerance);
+}
+
+// `impostor_trace` against the impostor whose six faces start at `base_layer`.
+fn impostor_trace_at(
+    map: texture_2d_array<f32>,
+    base_layer: i32,
+    center: vec3<f32>,
+    o: vec3<f32>,
+    d: vec3<f32>,
+    t_min: f32,
+    t_max: f32,
+    tolerance: f32,
+) -> ImpostorHit {
     var hit: ImpostorHit;
     hit.found = false;
     var t_prev = t_min;
-    var f_prev = impostor_f(map, center, o + d * t_min);
+    var f_prev = impostor_f(map, base_layer, center, o + d * t_min);
     let dt = (t_max - t_min) / f32(IMPOSTOR_LINEAR_STEPS);
     for (var i = 1u; i <= IMPOSTOR_LINEAR_STEPS; i++) {
         let t = t_min + dt * f32(i);
-        let f = impostor_f(map, center, o + d * t);
+        let f = impostor_f(map, base_layer, center, o + d * t);
         let crossing = (f_prev < 0.0) != (f < 0.0);
         if crossing && abs(f) < 1e29 && abs(f_prev) < 1e29 {
             // Secant refinement inside [t_prev, t].
@@ -118,7 +142,7 @@ fn impostor_trace(
             var fm = f;
             for (var k = 0u; k < IMPOSTOR_SECANT_STEPS; k++) {
                 tm = ta + (tb - ta) * fa / (fa - fb);
-                fm = impostor_f(map, center, o + d * tm);
+                fm = impostor_f(map, base_layer, center, o + d * tm);
                 if abs(fm) > 1e29 {
                     break;
                 }
@@ -134,7 +158,7 @@ fn impostor_trace(
                 hit.found = true;
                 hit.t = tm;
                 hit.position = o + d * tm;
-                hit.normal = normalize(impostor_fetch(map, hit.position - center).xyz);
+                hit.normal = normalize(impostor_fetch_at(map, base_layer, hit.position - center).xyz);
                 return hit;
             }
         }
