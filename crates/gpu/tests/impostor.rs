@@ -38,13 +38,22 @@ struct Traced {
 /// Traces `rays` (origin, unit direction) against an impostor of `objects` around
 /// `center` (None: the objects' own centre) in sphere_on_plane.
 fn trace(objects: &[usize], center: Option<Vec3>, rays: &[(Vec3, Vec3)]) -> Vec<Traced> {
-    let src = caustics_scene::resolve("sphere_on_plane").expect("built-in scene");
+    trace_in("sphere_on_plane", objects, center, rays)
+}
+
+fn trace_in(
+    scene_name: &str,
+    objects: &[usize],
+    center: Option<Vec3>,
+    rays: &[(Vec3, Vec3)],
+) -> Vec<Traced> {
+    let src = caustics_scene::resolve(scene_name).expect("built-in scene");
     let mut json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&src).expect("read")).expect("JSON");
     json["camera"]["width"] = 32.into();
     json["camera"]["height"] = 24.into();
     let tmp = tempfile::tempdir().expect("tempdir");
-    let path = tmp.path().join("sphere_on_plane.json");
+    let path = tmp.path().join("scene.json");
     std::fs::write(&path, json.to_string()).expect("write");
     let scene = Scene::load(&path).expect("scene");
     let ctx =
@@ -119,7 +128,8 @@ fn trace(objects: &[usize], center: Option<Vec3>, rays: &[(Vec3, Vec3)]) -> Vec<
     let c = impostor.center;
     let mut params = [0u32; 8];
     params[..4].copy_from_slice(&bytemuck::cast::<[f32; 4], [u32; 4]>([c.x, c.y, c.z, 0.0]));
-    params[4] = (2.0 * impostor.reach).to_bits();
+    // A long search range (4× what any ray needs): coarse steps must still find hits.
+    params[4] = (8.0 * impostor.reach).to_bits();
     params[5] = 1e-3f32.to_bits();
     params[6] = rays.len() as u32;
     let param_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -239,4 +249,36 @@ fn rays_land_on_the_floor_impostor_around_the_sphere() {
     eprintln!("worst floor-hit error {worst} m");
     assert!(worst < 5e-3, "worst floor-hit error {worst} m");
     assert_eq!(hits[100].object, None, "a ray going up hit the floor");
+}
+
+/// The ring's floor seen from the ring's centre, 0.25 m above it: rays leaving the
+/// inner wall downwards land where the plane y = 0 says, also those that start above
+/// the centre (directions where the map stores nothing) and graze the floor.
+#[test]
+fn rays_from_the_ring_wall_land_on_the_floor() {
+    let center = Vec3::new(0.0, 0.25, 0.0);
+    let mut rays = Vec::new();
+    for i in 0..64 {
+        let a = i as f32 / 64.0 * std::f32::consts::TAU;
+        let h = 0.05 + 0.4 * ((i * 7) % 8) as f32 / 7.0;
+        let o = Vec3::new(0.999 * a.cos(), h, 0.999 * a.sin());
+        let inward = -Vec3::new(a.cos(), 0.0, a.sin());
+        let d = (inward + Vec3::new(0.0, -0.2 - 0.1 * (i % 5) as f32, 0.0)).normalize();
+        rays.push((o, d));
+    }
+    let hits = trace_in("ring", &[1], Some(center), &rays);
+    let mut worst = 0.0f32;
+    let mut missed = 0;
+    for ((o, d), h) in rays.iter().zip(&hits) {
+        if h.object != Some(1) {
+            missed += 1;
+            eprintln!("missed: ray from {o} along {d}");
+            continue;
+        }
+        let t = -o.y / d.y;
+        worst = worst.max((h.position - (*o + *d * t)).length());
+    }
+    eprintln!("ring floor: {missed} missed, worst error {worst} m");
+    assert_eq!(missed, 0);
+    assert!(worst < 5e-3, "worst floor-hit error {worst} m");
 }

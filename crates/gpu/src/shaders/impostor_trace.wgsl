@@ -2,7 +2,7 @@
 // Premecz 2005, "Approximate ray-tracing on the GPU with distance impostors"): the
 // surface is the set of points p with |p - c| = d(p - c), where d is the distance
 // stored in direction p - c of a cube map around the centre c. A ray is marched in
-// fixed steps until f(t) = |p(t) - c| - d(p(t) - c) changes sign, then refined by
+// growing steps until f(t) = |p(t) - c| - d(p(t) - c) changes sign, then refined by
 // secant steps. Exact for surfaces that are star-shaped around c (a sphere from its
 // centre, a heightfield from a point below it); approximate otherwise, which is the
 // method's (and the papers') stated limitation.
@@ -95,7 +95,8 @@ fn impostor_f(map: texture_2d_array<f32>, base_layer: i32, center: vec3<f32>, p:
 }
 
 const IMPOSTOR_LINEAR_STEPS: u32 = 32u;
-const IMPOSTOR_SECANT_STEPS: u32 = 8u;
+const IMPOSTOR_SECANT_STEPS: u32 = 12u;
+const IMPOSTOR_EDGE_STEPS: u32 = 10u;
 
 // First crossing of the ray o + t·d (|d| = 1) with the impostor's surface for t in
 // (t_min, t_max]. `tolerance` (m) bounds |f| at the accepted hit: a sign change that
@@ -127,19 +128,50 @@ fn impostor_trace_at(
     hit.found = false;
     var t_prev = t_min;
     var f_prev = impostor_f(map, base_layer, center, o + d * t_min);
-    let dt = (t_max - t_min) / f32(IMPOSTOR_LINEAR_STEPS);
+    // Steps grow quadratically: the first is (t_max - t_min)/32², so a surface near
+    // the ray's origin is not stepped over (a step that starts where the map stores
+    // nothing and ends behind the surface shows no sign change), the last are coarse.
+    let span = t_max - t_min;
+    let n = f32(IMPOSTOR_LINEAR_STEPS);
     for (var i = 1u; i <= IMPOSTOR_LINEAR_STEPS; i++) {
-        let t = t_min + dt * f32(i);
-        let f = impostor_f(map, base_layer, center, o + d * t);
-        let crossing = (f_prev < 0.0) != (f < 0.0);
-        if crossing && abs(f) < 1e29 && abs(f_prev) < 1e29 {
-            // Secant refinement inside [t_prev, t].
-            var ta = t_prev;
-            var fa = f_prev;
-            var tb = t;
-            var fb = f;
-            var tm = t;
-            var fm = f;
+        let x = f32(i) / n;
+        let t_step = t_min + span * x * x;
+        let f_step = impostor_f(map, base_layer, center, o + d * t_step);
+        var ta = t_prev;
+        var fa = f_prev;
+        var tb = t_step;
+        var fb = f_step;
+        let a_empty = abs(fa) > 1e29;
+        if a_empty != (abs(fb) > 1e29) {
+            // One end looks where the map stores nothing: bisect to the edge of the
+            // surface's region and search only the part that sees the surface, so a
+            // step from "nothing" to "behind the surface" is not taken as no hit.
+            var lo = ta;
+            var hi = tb;
+            for (var k = 0u; k < IMPOSTOR_EDGE_STEPS; k++) {
+                let mid = 0.5 * (lo + hi);
+                if (abs(impostor_f(map, base_layer, center, o + d * mid)) > 1e29) == a_empty {
+                    lo = mid;
+                } else {
+                    hi = mid;
+                }
+            }
+            if a_empty {
+                ta = hi;
+            } else {
+                tb = lo;
+            }
+            fa = impostor_f(map, base_layer, center, o + d * ta);
+            fb = impostor_f(map, base_layer, center, o + d * tb);
+        }
+        let crossing = (fa < 0.0) != (fb < 0.0);
+        if crossing && abs(fa) < 1e29 && abs(fb) < 1e29 {
+            // Secant refinement inside [ta, tb], Illinois variant: an end kept twice
+            // has its f halved, so a strongly curved f (a floor seen at grazing
+            // angles) still converges instead of creeping in from one side.
+            var tm = tb;
+            var fm = fb;
+            var kept = 0;
             for (var k = 0u; k < IMPOSTOR_SECANT_STEPS; k++) {
                 tm = ta + (tb - ta) * fa / (fa - fb);
                 fm = impostor_f(map, base_layer, center, o + d * tm);
@@ -149,9 +181,17 @@ fn impostor_trace_at(
                 if (fm < 0.0) == (fa < 0.0) {
                     ta = tm;
                     fa = fm;
+                    if kept == 1 {
+                        fb *= 0.5;
+                    }
+                    kept = 1;
                 } else {
                     tb = tm;
                     fb = fm;
+                    if kept == -1 {
+                        fa *= 0.5;
+                    }
+                    kept = -1;
                 }
             }
             if abs(fm) <= tolerance {
@@ -162,8 +202,8 @@ fn impostor_trace_at(
                 return hit;
             }
         }
-        t_prev = t;
-        f_prev = f;
+        t_prev = t_step;
+        f_prev = f_step;
     }
     return hit;
 }
