@@ -136,7 +136,7 @@ pub fn info() -> MethodInfo {
                 ("split_depth_slope", "corner depths changing faster than this (|Δdepth|/lateral) split"),
                 ("split_hit_px", "edge-midpoint photon hits off the linear prediction by more than this (camera px) split (Sect. 6)"),
                 ("split_energy", "split beams that carry much light or focus it (Sect. 4.2)"),
-                ("split_energy_threshold", "split while flux share x A(0)/min A(y) exceeds this"),
+                ("split_energy_threshold", "split while flux share x A(0)/A(where seen) exceeds this (the receiver; the narrowest point in a medium)"),
                 ("split_camera", "split beams that look large from the camera (Sect. 4.2)"),
                 ("split_camera_px", "split while the beam base spans more than this many pixels"),
             ]);

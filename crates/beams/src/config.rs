@@ -43,7 +43,8 @@ pub struct BeamConfig {
     /// against the linear prediction from the corners, in camera pixels (Sect. 6).
     pub split_hit_px: f64,
     /// Split oracle, energy criterion: split while (flux share of the beam relative to
-    /// a base-grid beam) × (A(0) / min A(y)) exceeds `split_energy_threshold`.
+    /// a base-grid beam) × (A(0) / A where the beam is seen: at its receiver, or at its
+    /// narrowest in a medium) exceeds `split_energy_threshold`.
     pub split_energy: bool,
     /// Dimensionless.
     pub split_energy_threshold: f64,
