@@ -2,50 +2,17 @@
 //! (lavapipe on CI; no adapter is a failure, not a skip): errors against the CPU
 //! reference, and prisms against tight hulls on the same beams.
 
-use std::path::{Path, PathBuf};
+mod common;
 
-use caustics::result::RunResult;
-use caustics::run::{RunOptions, RunOutcome, run};
-use caustics_metrics::{HdrImage, read_exr};
+use std::path::Path;
+
+use caustics::run::{RunOptions, run};
+use caustics_metrics::HdrImage;
 use caustics_reference::{Reference, ReferenceOptions};
 use caustics_scene::Scene;
 
-fn small_scene(dir: &Path, name: &str, width: u32, height: u32) -> PathBuf {
-    let src = caustics_scene::resolve(name).expect("built-in scene");
-    let mut json: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&src).expect("read scene"))
-            .expect("scene JSON");
-    json["camera"]["width"] = width.into();
-    json["camera"]["height"] = height.into();
-    let path = dir.join(format!("{name}.json"));
-    std::fs::write(&path, json.to_string()).expect("write scene");
-    path
-}
-
 fn options(scene: &Path, out: &Path, method: &str, params: &[&str]) -> RunOptions {
-    RunOptions {
-        scene: scene.display().to_string(),
-        method: method.into(),
-        params: params.iter().map(|s| s.to_string()).collect(),
-        frames: 1,
-        warmup: 0,
-        reference: None,
-        out: out.to_owned(),
-        adapter: None,
-        exposure: 2.0,
-        references: out.join("no-reference-cache"),
-    }
-}
-
-fn run_done(o: &RunOptions) -> (HdrImage, RunResult) {
-    match run(o).unwrap_or_else(|e| panic!("caustics run failed: {e:#}")) {
-        RunOutcome::Done { dir, result } => {
-            let surface = read_exr(&dir.join("surface.exr")).expect("surface.exr");
-            surface.check_finite("surface").expect("finite caustic");
-            (surface, *result)
-        }
-        RunOutcome::Skipped { reason } => panic!("unexpectedly skipped: {reason}"),
-    }
+    common::run_options(scene, out, method, params)
 }
 
 /// Parameters that keep the test small: a 256² light G-buffer (the impostors keep
@@ -60,7 +27,7 @@ const SMALL: [&str; 1] = ["light_resolution=256"];
 #[test]
 fn adaptive_beams_on_sphere_on_plane_is_close_to_the_reference() {
     let tmp = tempfile::tempdir().expect("tempdir");
-    let scene_path = small_scene(tmp.path(), "sphere_on_plane", 96, 72);
+    let scene_path = common::small_scene(tmp.path(), "sphere_on_plane", 96, 72);
     let scene = Scene::load(&scene_path).expect("scene");
     let reference = Reference::new(&scene)
         .expect("reference")
@@ -81,7 +48,7 @@ fn adaptive_beams_on_sphere_on_plane_is_close_to_the_reference() {
 
     let mut o = options(&scene_path, tmp.path(), "adaptive-beams", &SMALL);
     o.reference = Some(reference_path);
-    let (surface, result) = run_done(&o);
+    let (surface, result) = common::run_surface(&o);
     let errors = result.errors.expect("errors against the reference").surface;
     // Caustic energy away from the focus (3 px around every reference pixel above 1):
     // at the focus a pixel-centre sample of a near-singular irradiance and a pixel
@@ -127,14 +94,15 @@ fn adaptive_beams_on_sphere_on_plane_is_close_to_the_reference() {
 #[test]
 fn tight_hulls_shade_fewer_fragments_than_prisms_for_the_same_image() {
     let tmp = tempfile::tempdir().expect("tempdir");
-    let scene_path = small_scene(tmp.path(), "sphere_on_plane", 96, 72);
+    let scene_path = common::small_scene(tmp.path(), "sphere_on_plane", 96, 72);
     let mut images = Vec::new();
     let mut fill = Vec::new();
     for hull in ["hull=prism", "hull=tight"] {
         let out = tmp.path().join(hull);
         let mut params = SMALL.to_vec();
         params.push(hull);
-        let (surface, result) = run_done(&options(&scene_path, &out, "adaptive-beams", &params));
+        let (surface, result) =
+            common::run_surface(&options(&scene_path, &out, "adaptive-beams", &params));
         let fragments = result.fragments.expect("pipeline statistics on lavapipe");
         fill.push(fragments.fill_total);
         images.push(surface);
@@ -151,10 +119,11 @@ fn tight_hulls_shade_fewer_fragments_than_prisms_for_the_same_image() {
 #[test]
 fn static_grid_counts_its_beams_and_refuses_refinement_parameters() {
     let tmp = tempfile::tempdir().expect("tempdir");
-    let scene_path = small_scene(tmp.path(), "sphere_on_plane", 64, 48);
+    let scene_path = common::small_scene(tmp.path(), "sphere_on_plane", 64, 48);
     let mut params = SMALL.to_vec();
     params.push("grid=16");
-    let (_, result) = run_done(&options(&scene_path, tmp.path(), "static-grid", &params));
+    let (_, result) =
+        common::run_surface(&options(&scene_path, tmp.path(), "static-grid", &params));
     let c = &result.counters;
     assert_eq!(c["base_triangles"], 512);
     assert_eq!(

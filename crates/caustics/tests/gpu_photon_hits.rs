@@ -4,35 +4,24 @@
 //! `GpuError::NoAdapter`, which says to install mesa-vulkan-drivers. Small images,
 //! photon images and cube maps keep them fast.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use caustic_triangles::photon_hits::{self, CausticMap, PhotonHit};
 use caustic_triangles::{CausticTriangles, CausticTrianglesParams};
-use caustics::result::RunResult;
 use caustics::run::{RunOptions, RunOutcome, run};
 use caustics_gpu::{
     AdapterChoice, FrameMode, GpuContext, GpuScene, PassProfiler, Renderer, RendererOptions,
 };
 use caustics_method::CausticsMethod;
-use caustics_metrics::{HdrImage, read_exr};
+use caustics_metrics::HdrImage;
 use caustics_scene::{Scene, Vec3};
 use splatting::{Splatting, SplattingParams};
 
-fn write_scene(dir: &Path, name: &str, json: &serde_json::Value) -> PathBuf {
-    let path = dir.join(format!("{name}.json"));
-    std::fs::write(&path, serde_json::to_string_pretty(json).expect("json")).expect("write");
-    path
-}
-
 fn small_builtin(dir: &Path, name: &str, width: u32, height: u32) -> PathBuf {
-    let src = caustics_scene::resolve(name).expect("built-in scene");
-    let mut json: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&src).expect("read scene"))
-            .expect("scene JSON");
-    json["camera"]["width"] = width.into();
-    json["camera"]["height"] = height.into();
-    write_scene(dir, name, &json)
+    common::small_scene(dir, name, width, height)
 }
 
 /// Small settings shared by the tests: 48² photon image, 128² cube faces.
@@ -45,29 +34,7 @@ fn options(scene: &Path, out: &Path, method: &str, params: &[&str]) -> RunOption
 
 /// Options with exactly the parameters given.
 fn raw_options(scene: &Path, out: &Path, method: &str, params: &[&str]) -> RunOptions {
-    RunOptions {
-        scene: scene.display().to_string(),
-        method: method.into(),
-        params: params.iter().map(|s| s.to_string()).collect(),
-        frames: 1,
-        warmup: 0,
-        reference: None,
-        out: out.to_owned(),
-        adapter: None,
-        exposure: 2.0,
-        references: out.join("no-reference-cache"),
-    }
-}
-
-fn run_done(o: &RunOptions) -> (HdrImage, RunResult) {
-    match run(o).unwrap_or_else(|e| panic!("caustics run failed: {e:#}")) {
-        RunOutcome::Done { dir, result } => {
-            let surface = read_exr(&dir.join("surface.exr")).expect("surface.exr");
-            surface.check_finite("surface").expect("finite caustic");
-            (surface, *result)
-        }
-        RunOutcome::Skipped { reason } => panic!("unexpectedly skipped: {reason}"),
-    }
+    common::run_options(scene, out, method, params)
 }
 
 /// The adapter, the uploaded scene and its base renderer (small shadow maps).
@@ -111,7 +78,7 @@ fn flat_refractor_scene(dir: &Path, direction: [f64; 3], irradiance: [f64; 3]) -
             {"shape": {"type": "quad", "center": [0, 0, 0], "normal": [0, 1, 0], "size": [6, 6]}, "material": "floor"}
         ]
     });
-    write_scene(dir, "flat_refractor", &scene)
+    common::write_scene(dir, "flat_refractor", &scene)
 }
 
 /// Exact unpolarized Fresnel reflectance (DESIGN "Conventions"), eta = n_i / n_t.
@@ -222,7 +189,7 @@ fn flat_mirror_vertices_carry_the_reflected_irradiance() {
             {"shape": {"type": "quad", "center": [0, 0, 0], "normal": [0, 1, 0], "size": [6, 6]}, "material": "floor"}
         ]
     });
-    let path = write_scene(tmp.path(), "flat_mirror", &scene);
+    let path = common::write_scene(tmp.path(), "flat_mirror", &scene);
     let (ctx, renderer) = renderer(&path);
     let params = CausticTrianglesParams {
         resolution: 40,
@@ -357,13 +324,13 @@ fn distance_test_removes_the_light_leak_onto_an_occluded_receiver() {
     for method in ["caustic-triangles", "splatting"] {
         let sum =
             |img: &HdrImage| -> f64 { pixels.iter().map(|&(i, j)| img.get(i, j)[1] as f64).sum() };
-        let (with, _) = run_done(&options(
+        let (with, _) = common::run_surface(&options(
             &path,
             &tmp.path().join(format!("{method}-on")),
             method,
             &["distance_test=true"],
         ));
-        let (without, _) = run_done(&options(
+        let (without, _) = common::run_surface(&options(
             &path,
             &tmp.path().join(format!("{method}-off")),
             method,
@@ -392,8 +359,8 @@ fn counts_and_images_are_deterministic() {
     let tmp = tempfile::tempdir().expect("tempdir");
     let path = small_builtin(tmp.path(), "ring", 64, 48);
     for method in ["caustic-triangles", "splatting"] {
-        let (a, ra) = run_done(&options(&path, &tmp.path().join("a"), method, &[]));
-        let (b, rb) = run_done(&options(&path, &tmp.path().join("b"), method, &[]));
+        let (a, ra) = common::run_surface(&options(&path, &tmp.path().join("a"), method, &[]));
+        let (b, rb) = common::run_surface(&options(&path, &tmp.path().join("b"), method, &[]));
         assert_eq!(ra.counters, rb.counters, "{method}");
         assert!(
             ra.counters["photon_hits"] > 100,

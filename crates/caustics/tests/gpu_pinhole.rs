@@ -2,52 +2,17 @@
 //! machine has (lavapipe on CI; no adapter is a failure, not a skip). Small images and
 //! few samples keep them fast.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 
-use caustics::result::RunResult;
-use caustics::run::{RunOptions, RunOutcome, run};
-use caustics_metrics::{HdrImage, read_exr};
+use caustics::run::{RunOptions, run};
 use caustics_scene::Vec3;
-
-fn small_scene(dir: &Path, name: &str, width: u32, height: u32) -> PathBuf {
-    let src = caustics_scene::resolve(name).expect("built-in scene");
-    let mut json: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&src).expect("read scene"))
-            .expect("scene JSON");
-    json["camera"]["width"] = width.into();
-    json["camera"]["height"] = height.into();
-    write_scene(dir, name, &json)
-}
-
-fn write_scene(dir: &Path, name: &str, json: &serde_json::Value) -> PathBuf {
-    let path = dir.join(format!("{name}.json"));
-    std::fs::write(&path, serde_json::to_string_pretty(json).expect("json")).expect("write");
-    path
-}
 
 fn options(scene: &Path, out: &Path, params: &[&str]) -> RunOptions {
     RunOptions {
-        scene: scene.display().to_string(),
-        method: "pinhole".into(),
-        params: params.iter().map(|s| s.to_string()).collect(),
         frames: 2,
-        warmup: 0,
-        reference: None,
-        out: out.to_owned(),
-        adapter: None,
-        exposure: 2.0,
-        references: out.join("no-reference-cache"),
-    }
-}
-
-fn run_done(o: &RunOptions) -> (HdrImage, RunResult) {
-    match run(o).unwrap_or_else(|e| panic!("caustics run failed: {e:#}")) {
-        RunOutcome::Done { dir, result } => {
-            let surface = read_exr(&dir.join("surface.exr")).expect("surface.exr");
-            surface.check_finite("surface").expect("finite caustic");
-            (surface, *result)
-        }
-        RunOutcome::Skipped { reason } => panic!("unexpectedly skipped: {reason}"),
+        ..common::run_options(scene, out, "pinhole", params)
     }
 }
 
@@ -68,7 +33,7 @@ fn flat_mirror_scene(dir: &Path, light: serde_json::Value, mirror_size: f64) -> 
             {"shape": {"type": "quad", "center": [0, 0, 0], "normal": [0, 1, 0], "size": [4, 4]}, "material": "floor"}
         ]
     });
-    write_scene(dir, "flat_mirror", &scene)
+    common::write_scene(dir, "flat_mirror", &scene)
 }
 
 /// The floor point (y = 0) seen through the centre of pixel (i, j).
@@ -96,7 +61,7 @@ fn one_sample_on_a_flat_mirror_gives_the_analytic_reflected_irradiance() {
         .map(|e| e / (std::f64::consts::TAU * (1.0 - alpha.cos())))
         .collect();
     for filtering in ["off", "full"] {
-        let (surface, result) = run_done(&options(
+        let (surface, result) = common::run_surface(&options(
             &path,
             &tmp.path().join(filtering),
             &[
@@ -164,8 +129,8 @@ fn one_sample_on_a_flat_mirror_gives_the_analytic_reflected_irradiance() {
 #[test]
 fn ring_run_has_consistent_counters_passes_and_heatmap() {
     let tmp = tempfile::tempdir().expect("tempdir");
-    let scene = small_scene(tmp.path(), "ring", 64, 48);
-    let (surface, result) = run_done(&options(
+    let scene = common::small_scene(tmp.path(), "ring", 64, 48);
+    let (surface, result) = common::run_surface(&options(
         &scene,
         tmp.path(),
         &["samples=200", "samples_per_pass=64"],
@@ -202,7 +167,7 @@ fn filtering_changes_the_image_only_where_the_reflector_is_curved() {
         serde_json::json!({"type": "point", "position": [-1, 1, 0], "intensity": [5, 5, 5]});
     let flat = flat_mirror_scene(tmp.path(), light, 0.5);
     let run_with = |scene: &Path, f: &str| {
-        run_done(&options(
+        common::run_surface(&options(
             scene,
             &tmp.path().join(f),
             &["samples=64", &format!("filtering=\"{f}\"")],
@@ -217,7 +182,7 @@ fn filtering_changes_the_image_only_where_the_reflector_is_curved() {
         "flat mirror"
     );
     // The ring is curved around its axis: the footprint is not zero.
-    let ring = small_scene(tmp.path(), "ring", 64, 48);
+    let ring = common::small_scene(tmp.path(), "ring", 64, 48);
     let off = run_with(&ring, "off");
     let on = run_with(&ring, "curvature");
     let changed = off
@@ -235,10 +200,10 @@ fn filtering_changes_the_image_only_where_the_reflector_is_curved() {
 #[test]
 fn same_seed_same_image_other_seed_other_image_for_every_strategy() {
     let tmp = tempfile::tempdir().expect("tempdir");
-    let scene = small_scene(tmp.path(), "ring", 48, 36);
+    let scene = common::small_scene(tmp.path(), "ring", 48, 36);
     for strategy in ["random", "grid", "quantized", "neighbor_removal"] {
         let go = |seed: u32, tag: &str| {
-            run_done(&options(
+            common::run_surface(&options(
                 &scene,
                 &tmp.path().join(format!("{strategy}-{tag}")),
                 &[
@@ -260,8 +225,8 @@ fn same_seed_same_image_other_seed_other_image_for_every_strategy() {
 #[test]
 fn refracting_sphere_focuses_light_under_it() {
     let tmp = tempfile::tempdir().expect("tempdir");
-    let scene = small_scene(tmp.path(), "sphere_on_plane", 64, 48);
-    let (surface, _) = run_done(&options(&scene, tmp.path(), &["samples=300"]));
+    let scene = common::small_scene(tmp.path(), "sphere_on_plane", 64, 48);
+    let (surface, _) = common::run_surface(&options(&scene, tmp.path(), &["samples=300"]));
     let max = surface.pixels.iter().map(|p| p[1]).fold(0.0f32, f32::max);
     // The direct floor radiance is ρ/π·E·cos ≈ 0.25: the focus is much brighter.
     assert!(max > 1.0, "no focus under the glass sphere: max {max}");
@@ -270,7 +235,7 @@ fn refracting_sphere_focuses_light_under_it() {
 #[test]
 fn bad_parameters_are_clear_errors_and_write_nothing() {
     let tmp = tempfile::tempdir().expect("tempdir");
-    let scene = small_scene(tmp.path(), "ring", 32, 24);
+    let scene = common::small_scene(tmp.path(), "ring", 32, 24);
     for (param, needle) in [
         ("sampling=\"hexagonal\"", "unknown variant"),
         ("samples=0", "samples"),

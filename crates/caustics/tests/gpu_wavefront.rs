@@ -2,48 +2,19 @@
 //! machine has (lavapipe on CI). Without an adapter they fail with the message from
 //! `GpuError::NoAdapter`, which says to install mesa-vulkan-drivers.
 
-use std::path::{Path, PathBuf};
+mod common;
+
+use std::path::Path;
 
 use caustics::result::RunResult;
-use caustics::run::{RunOptions, RunOutcome, run};
+use caustics::run::{RunOptions, run};
 use caustics_metrics::{HdrImage, read_exr};
-
-/// Writes a copy of a built-in scene with a smaller camera, for fast tests.
-fn small_scene(dir: &Path, name: &str, width: u32, height: u32) -> PathBuf {
-    let src = caustics_scene::resolve(name).expect("built-in scene");
-    let mut json: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&src).expect("read scene"))
-            .expect("scene JSON");
-    json["camera"]["width"] = width.into();
-    json["camera"]["height"] = height.into();
-    let path = dir.join(format!("{name}.json"));
-    std::fs::write(
-        &path,
-        serde_json::to_string_pretty(&json).expect("serialize"),
-    )
-    .expect("write scene");
-    path
-}
 
 fn options(scene: &Path, out: &Path) -> RunOptions {
     RunOptions {
-        scene: scene.display().to_string(),
-        method: "wavefront".into(),
-        params: vec![],
         frames: 3,
         warmup: 1,
-        reference: None,
-        out: out.to_owned(),
-        adapter: None,
-        exposure: 2.0,
-        references: out.join("no-reference-cache"),
-    }
-}
-
-fn run_done(o: &RunOptions) -> (PathBuf, RunResult) {
-    match run(o).unwrap_or_else(|e| panic!("caustics run failed: {e:#}")) {
-        RunOutcome::Done { dir, result } => (dir, *result),
-        RunOutcome::Skipped { reason } => panic!("unexpectedly skipped: {reason}"),
+        ..common::run_options(scene, out, "wavefront", &[])
     }
 }
 
@@ -57,8 +28,8 @@ fn nonzero_pixels(img: &HdrImage) -> usize {
 #[test]
 fn water_pool_run_writes_a_finite_nonempty_caustic_with_consistent_counts() {
     let tmp = tempfile::tempdir().expect("tempdir");
-    let scene = small_scene(tmp.path(), "water_pool", 320, 240);
-    let (dir, result) = run_done(&options(&scene, tmp.path()));
+    let scene = common::small_scene(tmp.path(), "water_pool", 320, 240);
+    let (dir, result) = common::run_dir(&options(&scene, tmp.path()));
 
     for f in [
         "result.json",
@@ -196,7 +167,7 @@ fn flat_water_gives_the_analytic_floor_radiance_within_one_percent() {
     });
     let path = tmp.path().join("flat_water.json");
     std::fs::write(&path, serde_json::to_string_pretty(&scene).expect("json")).expect("write");
-    let (dir, result) = run_done(&options(&path, tmp.path()));
+    let (dir, result) = common::run_dir(&options(&path, tmp.path()));
     let surface = read_exr(&dir.join("surface.exr")).expect("surface.exr");
 
     let (stats, fill) = splat_statistics_vs_heatmap(&result);
@@ -239,7 +210,7 @@ fn timestamps_are_nonzero_and_increase_through_a_frame() {
         AdapterChoice, FrameMode, GpuContext, GpuScene, PassProfiler, Renderer, RendererOptions,
     };
     let tmp = tempfile::tempdir().expect("tempdir");
-    let path = small_scene(tmp.path(), "sphere_on_plane", 128, 96);
+    let path = common::small_scene(tmp.path(), "sphere_on_plane", 128, 96);
     let scene = caustics_scene::Scene::load(&path).expect("scene");
     let ctx =
         GpuContext::new(&AdapterChoice::from_flag_or_env(None)).unwrap_or_else(|e| panic!("{e}"));
@@ -290,8 +261,8 @@ fn timestamps_are_nonzero_and_increase_through_a_frame() {
 #[test]
 fn errors_against_a_reference_are_zero_for_itself_and_tell_scale_from_shape() {
     let tmp = tempfile::tempdir().expect("tempdir");
-    let scene = small_scene(tmp.path(), "water_pool", 128, 96);
-    let (dir, first) = run_done(&options(&scene, &tmp.path().join("a")));
+    let scene = common::small_scene(tmp.path(), "water_pool", 128, 96);
+    let (dir, first) = common::run_dir(&options(&scene, &tmp.path().join("a")));
     assert!(first.errors.is_none(), "no reference, no errors");
     let surface = read_exr(&dir.join("surface.exr")).expect("surface.exr");
 
@@ -300,7 +271,7 @@ fn errors_against_a_reference_are_zero_for_itself_and_tell_scale_from_shape() {
     caustics_metrics::write_exr(&same, &surface).expect("write reference");
     let mut o = options(&scene, &tmp.path().join("b"));
     o.reference = Some(same);
-    let (dir_b, r) = run_done(&o);
+    let (dir_b, r) = common::run_dir(&o);
     let e = r.errors.expect("errors with a reference").surface;
     assert_eq!(e.rmse, 0.0, "runs are deterministic on one adapter");
     assert_eq!(e.flip, 0.0);
@@ -313,7 +284,7 @@ fn errors_against_a_reference_are_zero_for_itself_and_tell_scale_from_shape() {
     caustics_metrics::write_exr(&double, &surface.scaled(2.0)).expect("write reference");
     o.reference = Some(double);
     o.out = tmp.path().join("c");
-    let e = run_done(&o).1.errors.expect("errors").surface;
+    let e = common::run_dir(&o).1.errors.expect("errors").surface;
     assert!(e.rmse > 0.0 && e.flip > 0.0);
     assert!(
         (e.best_scale - 2.0).abs() < 1e-4,
@@ -331,7 +302,7 @@ fn errors_against_a_reference_are_zero_for_itself_and_tell_scale_from_shape() {
 #[test]
 fn a_reference_of_the_wrong_size_is_refused_before_any_write() {
     let tmp = tempfile::tempdir().expect("tempdir");
-    let scene = small_scene(tmp.path(), "water_pool", 64, 48);
+    let scene = common::small_scene(tmp.path(), "water_pool", 64, 48);
     let reference = tmp.path().join("small.exr");
     caustics_metrics::write_exr(&reference, &HdrImage::new(32, 24)).expect("write");
     let out = tmp.path().join("out");
@@ -349,7 +320,7 @@ fn a_reference_of_the_wrong_size_is_refused_before_any_write() {
 fn a_cached_reference_is_found_by_scene_hash_and_used() {
     use caustics::references::{ReferenceMeta, cache_dir, find};
     let tmp = tempfile::tempdir().expect("tempdir");
-    let path = small_scene(tmp.path(), "water_pool", 64, 48);
+    let path = common::small_scene(tmp.path(), "water_pool", 64, 48);
     let scene = caustics_scene::Scene::load(&path).expect("scene");
     let root = tmp.path().join("refs");
     assert!(find(&root, &scene).expect("empty cache").is_none());
@@ -383,7 +354,7 @@ fn a_cached_reference_is_found_by_scene_hash_and_used() {
 
     let mut o = options(&path, &tmp.path().join("out"));
     o.references = root.clone();
-    let (_, r) = run_done(&o);
+    let (_, r) = common::run_dir(&o);
     let e = r.errors.expect("the cached reference is used");
     assert_eq!(e.reference_source, "cache");
     assert!(e.reference.ends_with("caustic.exr"), "{}", e.reference);
@@ -429,7 +400,7 @@ fn flat_mirror_gives_the_analytic_reflected_radiance_within_one_percent() {
     std::fs::write(&path, serde_json::to_string_pretty(&scene).expect("json")).expect("write");
     let mut o = options(&path, tmp.path());
     o.params = vec!["grid=64".into()];
-    let (dir, result) = run_done(&o);
+    let (dir, result) = common::run_dir(&o);
     assert_eq!(result.counters["dropped_face_mismatch"], 0);
     let surface = read_exr(&dir.join("surface.exr")).expect("surface.exr");
     let cos_floor = std::f64::consts::FRAC_1_SQRT_2;

@@ -1,0 +1,59 @@
+//! Helpers shared by the harness's GPU test files (each file is its own crate and
+//! uses a subset, hence the `dead_code` allowance).
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+
+use caustics::result::RunResult;
+use caustics::run::{RunOptions, RunOutcome, run};
+use caustics_metrics::{HdrImage, read_exr};
+
+/// Writes `json` as `<dir>/<name>.json`.
+pub(crate) fn write_scene(dir: &Path, name: &str, json: &serde_json::Value) -> PathBuf {
+    let path = dir.join(format!("{name}.json"));
+    std::fs::write(&path, serde_json::to_string_pretty(json).expect("json")).expect("write");
+    path
+}
+
+/// A copy of a built-in scene with a smaller camera, for fast tests.
+pub(crate) fn small_scene(dir: &Path, name: &str, width: u32, height: u32) -> PathBuf {
+    let src = caustics_scene::resolve(name).expect("built-in scene");
+    let mut json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&src).expect("read scene"))
+            .expect("scene JSON");
+    json["camera"]["width"] = width.into();
+    json["camera"]["height"] = height.into();
+    write_scene(dir, name, &json)
+}
+
+/// One timed frame, no warm-up, no reference cache: the cheapest run of `method`.
+pub(crate) fn run_options(scene: &Path, out: &Path, method: &str, params: &[&str]) -> RunOptions {
+    RunOptions {
+        scene: scene.display().to_string(),
+        method: method.into(),
+        params: params.iter().map(|s| s.to_string()).collect(),
+        frames: 1,
+        warmup: 0,
+        reference: None,
+        out: out.to_owned(),
+        adapter: None,
+        exposure: 2.0,
+        references: out.join("no-reference-cache"),
+    }
+}
+
+/// Runs and returns the output folder; a skipped run fails the test.
+pub(crate) fn run_dir(o: &RunOptions) -> (PathBuf, RunResult) {
+    match run(o).unwrap_or_else(|e| panic!("caustics run failed: {e:#}")) {
+        RunOutcome::Done { dir, result } => (dir, *result),
+        RunOutcome::Skipped { reason } => panic!("unexpectedly skipped: {reason}"),
+    }
+}
+
+/// Runs and returns the (finite) surface caustic image.
+pub(crate) fn run_surface(o: &RunOptions) -> (HdrImage, RunResult) {
+    let (dir, result) = run_dir(o);
+    let surface = read_exr(&dir.join("surface.exr")).expect("surface.exr");
+    surface.check_finite("surface").expect("finite caustic");
+    (surface, result)
+}
