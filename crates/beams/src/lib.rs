@@ -23,12 +23,26 @@
 //! perpendicular to a directional light (or intensity × solid angle) × Fresnel,
 //! reflectance and extinction along its path; radiance = ρ/π · E on receivers.
 //!
-//! Differences from the paper, all stated where they live: refinement is a
-//! deterministic prefix sum per level instead of stream-out; the volume segment is
-//! clipped exactly at the visible surface (the soft-particle fade is optional);
-//! beam extrusion stops at the receiver found through a distance impostor of the
-//! diffuse objects, not at an energy cut-off; a beam that would meet the surface it
-//! just left again (concave generators, the inside of a ring) passes through it.
+//! Differences from the paper, all stated where they live:
+//! - refinement is four compute kernels per level with a deterministic prefix sum
+//!   instead of a geometry shader with stream-out, so the same beams land in the same
+//!   slots every frame (and the additive image is bit-identical frame to frame);
+//! - the split oracle's discontinuity criterion also traces the three edge midpoints
+//!   and splits where their light lands more than `split_hit_px` camera pixels off
+//!   the linear prediction (the "photon hit differences" of Sect. 6, used at every
+//!   level); the energy criterion is (flux share) × A(0)/A(y) where the beam is seen
+//!   (at its receiver; at its narrowest in a medium);
+//! - all distance impostors (one per specular object, one of the diffuse receivers
+//!   around the generators) share one texture atlas, so each query is one inlined
+//!   search (WGSL inlines every call);
+//! - the volume segment is clipped exactly at the visible surface, so the
+//!   soft-particle fade (Sect. 5.2) is optional (`soft_depth_m`, default off);
+//! - beam extrusion stops at the receiver found through the receivers' impostor, not
+//!   at an energy cut-off;
+//! - light that the paper drops is dropped here too: total internal reflection ends
+//!   a path, the Fresnel reflection at the exit surface is not followed, and a beam
+//!   that would meet the surface it just left again (concave generators, the inside
+//!   of a ring) passes through it.
 
 pub mod config;
 pub mod geometry;
