@@ -4,7 +4,7 @@
 //! the same way (DESIGN "The method contract"). Experiments as data
 //! (`bench/experiments/*.json`, [`experiment`]), `caustics reproduce` and `merge`
 //! ([`reproduce`], [`summary`], [`plots`]) and the regression gate `caustics compare`
-//! ([`compare`]) build on `run`.
+//! ([`compare`]) and the static HTML report ([`report`]) build on `run`.
 
 pub mod compare;
 pub mod experiment;
@@ -13,6 +13,7 @@ pub mod plots;
 pub mod reference_cmd;
 pub mod references;
 pub mod registry;
+pub mod report;
 pub mod reproduce;
 pub mod result;
 pub mod run;

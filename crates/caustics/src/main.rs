@@ -5,6 +5,7 @@ use std::process::ExitCode;
 use anyhow::Result;
 use caustics::compare::CompareArgs;
 use caustics::reference_cmd::ReferenceArgs;
+use caustics::report::ReportArgs;
 use caustics::reproduce::{MergeArgs, ReproduceArgs};
 use caustics::run::{EXIT_SKIPPED, RunOptions, RunOutcome};
 use caustics::{registry, run};
@@ -37,6 +38,8 @@ enum Command {
     Merge(MergeArgs),
     /// Compare two result folders run by run; exit 2 on a regression.
     Compare(CompareArgs),
+    /// Write a static HTML report (index.html + images) of reproduced experiments.
+    Report(ReportArgs),
 }
 
 /// Exit code of `compare` when it finds a regression (1 is an error).
@@ -92,6 +95,10 @@ fn main() -> ExitCode {
             } else {
                 ExitCode::SUCCESS
             }
+        }),
+        Command::Report(args) => caustics::report::report(&args).map(|index| {
+            println!("report: {}", index.display());
+            ExitCode::SUCCESS
         }),
         Command::Run(opts) => run::run(&opts).map(|o| match o {
             RunOutcome::Done { dir, result } => {

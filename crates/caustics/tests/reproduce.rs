@@ -131,6 +131,33 @@ fn reproduce_then_shards_merged_equal_the_unsharded_run() {
     let run = dir.join(ring50.dir.as_deref().expect("dir"));
     assert!(run.join("composite.png").is_file() && !run.join("surface.exr").exists());
 
+    // The HTML report: self-contained (every image it shows lies beside it).
+    let index = caustics::report::report(&caustics::report::ReportArgs {
+        dir: t.join("whole"),
+        out: Some(t.join("report")),
+    })
+    .expect("report");
+    let html = std::fs::read_to_string(&index).expect("index");
+    assert!(
+        html.contains("ring/pinhole/cube_size=32,samples=50") && html.contains("imaginary GPU")
+    );
+    let srcs: Vec<&str> = html
+        .split("src=\"")
+        .skip(1)
+        .filter_map(|s| s.split('"').next())
+        .collect();
+    assert!(srcs.len() >= 7 * 3, "{srcs:?}");
+    for src in srcs {
+        assert!(t.join("report").join(src).is_file(), "{src} not copied");
+    }
+    let e = caustics::report::report(&caustics::report::ReportArgs {
+        dir: t.join("nothing-here"),
+        out: Some(t.join("report2")),
+    })
+    .expect_err("no folder");
+    assert!(format!("{e:#}").contains("nothing-here"), "{e:#}");
+    assert!(!t.join("report2").exists());
+
     // Shards (references now cached), merged.
     for k in ["1/3", "2/3", "3/3"] {
         let o = reproduce(&args(t, &exp, &format!("shard{}", &k[..1]), Some(k))).expect("shard");
