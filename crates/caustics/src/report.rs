@@ -158,9 +158,9 @@ fn experiment_section(html: &mut String, dir: &Path, out: &Path) -> Result<()> {
         "<h2 id=\"{id}\">{id}</h2>\n<p>{}</p>\n",
         esc(&s.description)
     );
-    let _ = write!(
+    let _ = writeln!(
         html,
-        "<p class=meta>Adapter: {}<br>Commit: {}<br>Build: {} · scale {} · {} done, {} skipped, {} failed</p>\n",
+        "<p class=meta>Adapter: {}<br>Commit: {}<br>Build: {} · scale {} · {} done, {} skipped, {} failed</p>",
         esc(&s.adapters.join("; ")),
         esc(&s.commits.join(", ")),
         esc(&s.profiles.join(", ")),
