@@ -173,10 +173,27 @@ impl Report {
     }
 }
 
-/// Every `result.json` under `root`, by its folder relative to `root`.
+/// Every `result.json` under `root`, by its folder relative to `root`. In a
+/// `reproduce` output folder (one with a `manifest.json`) only the runs its manifest
+/// lists as done count, so stale runs of an earlier reproduction into the same folder
+/// are not compared.
 pub fn collect_results(root: &Path) -> Result<BTreeMap<String, RunResult>> {
     if !root.is_dir() {
         bail!("{}: no such folder", root.display());
+    }
+    if root.join("manifest.json").is_file() {
+        let m = crate::reproduce::read_manifest(root)?;
+        let mut out = BTreeMap::new();
+        for rel in m.runs.iter().filter_map(|r| r.dir.as_ref()) {
+            out.insert(rel.clone(), crate::summary::read_result(&root.join(rel))?);
+        }
+        if out.is_empty() {
+            bail!(
+                "{}: its manifest lists no run that was done",
+                root.display()
+            );
+        }
+        return Ok(out);
     }
     let mut out = BTreeMap::new();
     let mut stack = vec![root.to_path_buf()];

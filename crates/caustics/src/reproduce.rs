@@ -170,10 +170,12 @@ fn reproduce_one(
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     let (rendered, missing) = ensure_references(e, &runs, args)?;
     let progress = bar(runs.len() as u64, "runs");
+    // A steady tick redraws the bar below the lines each run prints to stderr.
+    progress.enable_steady_tick(std::time::Duration::from_millis(500));
     let mut statuses = Vec::new();
     for spec in &runs {
         progress.set_message(spec.key());
-        let status = progress.suspend(|| run_one(e, spec, args, out));
+        let status = run_one(e, spec, args, out);
         if status.status == "failed" {
             progress.println(format!(
                 "failed: {}: {}",

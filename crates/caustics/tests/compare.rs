@@ -336,3 +336,36 @@ fn the_binary_exits_2_on_a_regression_and_1_on_bad_folders_writing_nothing() {
     after.retain(|(p, _)| !p.contains("/empty") && !p.contains("/corrupt"));
     assert_eq!(before, after, "compare wrote or changed files");
 }
+
+#[test]
+fn in_a_reproduce_folder_only_the_manifest_runs_count() {
+    let base = template();
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let (b, n) = (tmp.path().join("base"), tmp.path().join("new"));
+    write(&b, &base);
+    write(&n, &base);
+    // A stale run of an earlier reproduction into NEW, with another fragment count.
+    let mut stale = base.clone();
+    stale["fragments"]["method_total"] = 1.into();
+    let d = n.join("runs/old/water_pool/wavefront");
+    std::fs::create_dir_all(&d).expect("mkdir");
+    std::fs::write(
+        d.join("result.json"),
+        serde_json::to_vec(&stale).expect("json"),
+    )
+    .expect("write");
+    let manifest = serde_json::json!({
+        "schema_version": 1, "experiment": "x", "experiment_hash": "0", "scale": 1.0,
+        "shard": [1, 1], "merged_from": [], "missing_references": [], "rendered_references": [],
+        "runs": [{"index": 0, "key": "water_pool/wavefront/default", "status": "done",
+                  "dir": "runs/default/water_pool/wavefront", "reason": null}]
+    });
+    std::fs::write(n.join("manifest.json"), manifest.to_string()).expect("write");
+    let r = compare(&args(&b, &n)).expect("compare");
+    assert_eq!(r.regressions(), 0, "{}", r.table(true));
+    assert!(
+        !r.lines.iter().any(|l| l.run.contains("old")),
+        "{}",
+        r.table(true)
+    );
+}
