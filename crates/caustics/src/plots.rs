@@ -135,6 +135,9 @@ fn plot_err<E: std::fmt::Debug>(e: E) -> anyhow::Error {
     anyhow!("drawing a plot: {e:?}")
 }
 
+/// A named series: colour, points, and whether they are joined by a line.
+type Series = (String, [u8; 3], Vec<(f64, f64)>, bool);
+
 /// Text to draw after plotters is done: (x, y, text, vertical).
 type Labels = Vec<(i32, i32, String, bool)>;
 
@@ -158,15 +161,14 @@ fn finish(buf: Vec<u8>, w: u32, h: u32, labels: &Labels, path: &Path) -> Result<
 
 /// A scatter plot with axes, ticks, labels, legend; `series` are (name, colour,
 /// points, connect-with-line).
-#[allow(clippy::type_complexity)]
 fn scatter(
     path: &Path,
     title: &str,
     x_label: &str,
     y_label: &str,
-    series: &[(String, [u8; 3], Vec<(f64, f64)>, bool)],
+    series: &[Series],
 ) -> Result<()> {
-    let (w, h) = (640u32, 420u32);
+    let (w, h) = (720u32, 420u32);
     let all: Vec<(f64, f64)> = series.iter().flat_map(|s| s.2.clone()).collect();
     let xa = Axis::fit(&all.iter().map(|p| p.0).collect::<Vec<_>>());
     let ya = Axis::fit(&all.iter().map(|p| p.1).collect::<Vec<_>>());
@@ -177,7 +179,7 @@ fn scatter(
         root.fill(&WHITE).map_err(plot_err)?;
         let mut chart = ChartBuilder::on(&root)
             .margin_top(28)
-            .margin_right(150)
+            .margin_right(210)
             .margin_left(70)
             .margin_bottom(40)
             .build_cartesian_2d(xa.range(), ya.range())
@@ -217,6 +219,13 @@ fn scatter(
                 chart
                     .draw_series(LineSeries::new(mapped.clone(), colour(*c).stroke_width(1)))
                     .map_err(plot_err)?;
+                chart
+                    .draw_series(
+                        mapped
+                            .iter()
+                            .map(|p| Circle::new(*p, 2, colour(*c).filled())),
+                    )
+                    .map_err(plot_err)?;
             } else {
                 chart
                     .draw_series(
@@ -227,7 +236,7 @@ fn scatter(
                     .map_err(plot_err)?;
             }
             // Legend entry in the right margin.
-            let (lx, ly) = (w as i32 - 140, 36 + 14 * i as i32);
+            let (lx, ly) = (w as i32 - 200, 36 + 14 * i as i32);
             root.draw(&Rectangle::new(
                 [(lx, ly), (lx + 10, ly + if *line { 2 } else { 8 })],
                 colour(*c).filled(),
@@ -240,7 +249,7 @@ fn scatter(
     labels.push((70, 10, title.to_owned(), false));
     let x_label = format!("{x_label}{}", if xa.log { " (log)" } else { "" });
     labels.push((
-        70 + (w as i32 - 220) / 2 - text_width(&x_label) as i32 / 2,
+        70 + (w as i32 - 280) / 2 - text_width(&x_label) as i32 / 2,
         h as i32 - 14,
         x_label,
         false,
@@ -322,6 +331,40 @@ fn fragments_plot(path: &Path, rows: &[(&Row, u64)], methods: &[String]) -> Resu
     finish(buf, w, h, &labels, path)
 }
 
+/// Images in a grid (up to 4 a row), each under its label, on white.
+fn tile(path: &Path, title: &str, tiles: &[(String, Rgb8Image)]) -> Result<()> {
+    let cols = tiles.len().min(4);
+    let rows = tiles.len().div_ceil(cols);
+    let label_h = 12;
+    let cell_w = tiles
+        .iter()
+        .map(|t| t.1.width.max(text_width(&t.0)))
+        .max()
+        .unwrap_or(1)
+        + 8;
+    let cell_h = tiles.iter().map(|t| t.1.height).max().unwrap_or(1) + label_h + 8;
+    let mut img = Rgb8Image::filled(
+        cols as u32 * cell_w + 8,
+        rows as u32 * cell_h + 24,
+        [255; 3],
+    );
+    draw_text(&mut img, 8, 6, title, INK);
+    for (i, (label, t)) in tiles.iter().enumerate() {
+        let (x0, y0) = (
+            8 + (i % cols) as u32 * cell_w,
+            20 + (i / cols) as u32 * cell_h,
+        );
+        draw_text(&mut img, x0, y0, label, INK);
+        for y in 0..t.height {
+            for x in 0..t.width {
+                img.set(x0 + x, y0 + label_h + y, t.get(x, y));
+            }
+        }
+    }
+    caustics_metrics::write_png(path, &img)?;
+    Ok(())
+}
+
 fn bar_label(r: &Row) -> String {
     let params: Vec<String> = r
         .params
@@ -386,6 +429,90 @@ pub fn write_plots(dir: &Path, s: &Summary) -> Result<Vec<String>> {
             &series,
         )?;
     }
+    // Error against each numeric parameter swept over 3+ values, one line per method and
+    // setting of the other parameters (e.g. RMSE against samples per sampling strategy).
+    for scene in &scenes {
+        let runs: Vec<&Row> = done
+            .iter()
+            .copied()
+            .filter(|r| &r.scene == scene && r.errors.is_some())
+            .collect();
+        let mut names: Vec<&String> = runs.iter().flat_map(|r| r.params.keys()).collect();
+        names.sort();
+        names.dedup();
+        for name in names {
+            let mut lines: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
+            for r in &runs {
+                let (Some(x), Some(e)) = (r.params.get(name).and_then(|v| v.as_f64()), r.errors)
+                else {
+                    continue;
+                };
+                let mut rest: Vec<String> = r
+                    .params
+                    .iter()
+                    .filter(|(k, _)| *k != name)
+                    .map(|(k, v)| {
+                        format!(
+                            "{k}={}",
+                            v.as_str().map(str::to_owned).unwrap_or(v.to_string())
+                        )
+                    })
+                    .collect();
+                rest.insert(0, r.method.clone());
+                let label = rest.join(" ");
+                match lines.iter_mut().find(|l| l.0 == label) {
+                    Some(l) => l.1.push((x, e.rmse)),
+                    None => lines.push((label, vec![(x, e.rmse)])),
+                }
+            }
+            lines.retain(|l| l.1.len() >= 3);
+            if lines.is_empty() {
+                continue;
+            }
+            let series: Vec<Series> = lines
+                .into_iter()
+                .enumerate()
+                .map(|(i, (label, mut pts))| {
+                    pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+                    (label, PALETTE[i % PALETTE.len()], pts, true)
+                })
+                .collect();
+            let path = need(
+                &mut written,
+                format!("error_vs_{}_{}.png", file_safe(name), file_safe(scene)),
+            )?;
+            scatter(
+                &path,
+                &format!("{}: {scene}: error against {name}", s.experiment),
+                name,
+                "RMSE of the surface caustic",
+                &series,
+            )?;
+        }
+    }
+    // Fill-rate heatmaps of every run of a scene side by side, with their colour bars.
+    if let Some(root) = dir.parent() {
+        for scene in &scenes {
+            let tiles: Vec<(String, Rgb8Image)> = done
+                .iter()
+                .filter(|r| &r.scene == scene)
+                .filter_map(|r| {
+                    let p = root.join(r.dir.as_ref()?).join("fill_heatmap.png");
+                    let img = caustics_metrics::read_png(&p).ok()?;
+                    Some((bar_label(r), img))
+                })
+                .collect();
+            if tiles.len() < 2 {
+                continue;
+            }
+            let path = need(&mut written, format!("heatmaps_{}.png", file_safe(scene)))?;
+            tile(
+                &path,
+                &format!("{}: {scene}: fragments per pixel", s.experiment),
+                &tiles,
+            )?;
+        }
+    }
     let frags: Vec<(&Row, u64)> = done
         .iter()
         .filter_map(|r| Some((*r, r.fragments?)))
@@ -437,7 +564,7 @@ mod tests {
         )
         .expect("plot");
         let img = caustics_metrics::read_png(&p).expect("png");
-        assert_eq!((img.width, img.height), (640, 420));
+        assert_eq!((img.width, img.height), (720, 420));
         assert!(img.pixels.contains(&PALETTE[0]), "no point drawn");
         assert!(img.pixels.contains(&INK), "no text or frame drawn");
     }
