@@ -139,7 +139,7 @@ fn table(html: &mut String, s: &Summary, rows: &[&Row]) {
                 .iter()
                 .map(|p| {
                     let ours = r.measure(&p.measure).map(num).unwrap_or_else(|| "–".into());
-                    format!("{} {} (ours {ours})", esc(&p.measure), num(p.value))
+                    format!("{} {} (ours {ours})", esc(&p.measure), p.value)
                 })
                 .collect::<Vec<_>>()
                 .join("<br>");

@@ -54,6 +54,10 @@ pub struct ReproduceArgs {
     /// Keep the EXR images of every run (by default only PNGs and result.json stay).
     #[arg(long)]
     pub keep_exr: bool,
+    /// Run nothing: rewrite summary.md, summary.json, bmf.json and plots/ of an earlier
+    /// reproduction in the output folder from its manifest and result files.
+    #[arg(long, conflicts_with = "shard")]
+    pub summary_only: bool,
 }
 
 /// Bumped when a field of the manifest or summary changes meaning.
@@ -140,6 +144,22 @@ pub fn reproduce(args: &ReproduceArgs) -> Result<Outcome> {
     };
     for e in &experiments {
         let out = args.out.join(&e.def.name);
+        if args.summary_only {
+            let manifest = read_manifest(&out)?;
+            if manifest.experiment_hash != e.hash || manifest.scale != args.scale {
+                bail!(
+                    "{}: made from another version of {} or another --scale ({}); run it again",
+                    out.join("manifest.json").display(),
+                    e.file.display(),
+                    manifest.scale
+                );
+            }
+            let s = crate::summary::write_all(&out, e, &manifest)?;
+            outcome.failed += s.failed;
+            eprintln!("{}: summary rewritten", out.join("summary.md").display());
+            outcome.dirs.push(out);
+            continue;
+        }
         let failed = reproduce_one(e, args, shard.unwrap_or((1, 1)), &out)?;
         outcome.failed += failed;
         outcome.dirs.push(out);

@@ -372,7 +372,7 @@ fn paper_cell(r: &Row) -> String {
                 .measure(&p.measure)
                 .map(|v| format!(" (ours {})", num(v)))
                 .unwrap_or_default();
-            format!("{} {}{ours}", p.measure, num(p.value))
+            format!("{} {}{ours}", p.measure, p.value)
         })
         .collect::<Vec<_>>()
         .join("; ")

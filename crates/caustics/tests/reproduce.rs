@@ -46,6 +46,7 @@ fn args(tmp: &Path, exp: &Path, out: &str, shard: Option<&str>) -> ReproduceArgs
         experiments: Some(exp.to_path_buf()),
         adapter: None,
         keep_exr: false,
+        summary_only: false,
     }
 }
 
@@ -130,6 +131,20 @@ fn reproduce_then_shards_merged_equal_the_unsharded_run() {
     // EXRs are dropped by default, PNGs kept.
     let run = dir.join(ring50.dir.as_deref().expect("dir"));
     assert!(run.join("composite.png").is_file() && !run.join("surface.exr").exists());
+
+    // The summary can be rewritten from the files alone, identically.
+    let before = std::fs::read(dir.join("summary.json")).expect("summary");
+    std::fs::remove_file(dir.join("summary.md")).expect("rm");
+    reproduce(&ReproduceArgs {
+        summary_only: true,
+        ..args(t, &exp, "whole", None)
+    })
+    .expect("summary only");
+    assert_eq!(
+        before,
+        std::fs::read(dir.join("summary.json")).expect("summary")
+    );
+    assert!(dir.join("summary.md").is_file());
 
     // The HTML report: self-contained (every image it shows lies beside it).
     let index = caustics::report::report(&caustics::report::ReportArgs {
