@@ -115,7 +115,7 @@ fn default_exposure() -> f32 {
 
 /// Image size: a scale of each scene's camera, or an absolute size.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(untagged, deny_unknown_fields)]
+#[serde(untagged, try_from = "RawResolution")]
 pub enum Resolution {
     /// Width and height in pixels.
     Absolute {
@@ -129,6 +129,26 @@ pub enum Resolution {
         /// In (0, 4].
         scale: f64,
     },
+}
+
+/// What a `resolution` object may hold; exactly one of the two forms.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawResolution {
+    width: Option<u32>,
+    height: Option<u32>,
+    scale: Option<f64>,
+}
+
+impl TryFrom<RawResolution> for Resolution {
+    type Error = String;
+    fn try_from(r: RawResolution) -> std::result::Result<Self, String> {
+        match (r.width, r.height, r.scale) {
+            (Some(width), Some(height), None) => Ok(Resolution::Absolute { width, height }),
+            (None, None, Some(scale)) => Ok(Resolution::Scale { scale }),
+            _ => Err("expected {\"scale\": S} or {\"width\": W, \"height\": H}".to_owned()),
+        }
+    }
 }
 
 impl Default for Resolution {

@@ -127,7 +127,15 @@ fn unknown_method_scene_and_param_name_file_and_field() {
 
 #[test]
 fn malformed_files_are_clear_errors() {
-    let cases: [(&str, &[&str]); 11] = [
+    let cases: [(&str, &[&str]); 13] = [
+        (
+            r#"{"name": "x", "resolution": {"scale": 0.5, "widht": 3}, "runs": [{"scenes": "*", "methods": "*"}]}"#,
+            &["resolution", "widht"],
+        ),
+        (
+            r#"{"name": "x", "resolution": {"width": 64}, "runs": [{"scenes": "*", "methods": "*"}]}"#,
+            &["resolution", "\"height\": H"],
+        ),
         ("{", &["EOF"]),
         (r#"{"name": "x"}"#, &["runs"]),
         (
