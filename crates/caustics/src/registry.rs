@@ -4,7 +4,14 @@ use caustics_method::MethodInfo;
 
 /// Every method the harness can run, in the order `caustics list` prints them.
 pub fn methods() -> Vec<MethodInfo> {
-    vec![wavefront::info(), pinhole::info()]
+    vec![
+        wavefront::info(),
+        pinhole::info(),
+        static_grid::info(),
+        adaptive_beams::info(),
+        caustic_triangles::info(),
+        splatting::info(),
+    ]
 }
 
 /// The method called `name`, or an error listing the known ones.

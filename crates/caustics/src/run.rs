@@ -172,6 +172,16 @@ pub fn run_scene(o: &RunOptions, scene: Scene) -> Result<RunOutcome> {
     }
     let samples = profiler.collect(&ctx)?;
     let counters = method.counters(&ctx)?;
+    // Methods report buffer overflow as counters named overflow_*; it is never silent.
+    for (name, value) in counters
+        .iter()
+        .filter(|(n, v)| n.starts_with("overflow") && **v > 0)
+    {
+        eprintln!(
+            "warning: {} overflowed its buffers ({name} = {value}); the image misses that work, raise the method's capacity parameter",
+            info.name
+        );
+    }
     let fill = renderer.read_fill_counts(&ctx)?;
     let read = |t: &caustics_gpu::textures::Target, what: &str| -> Result<HdrImage> {
         let rgba = caustics_gpu::readback::read_rgba32f(&ctx, &t.texture, what)?;

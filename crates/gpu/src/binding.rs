@@ -65,3 +65,60 @@ pub fn buffers_bind_group(
         entries: &entries,
     })
 }
+
+/// A sampled-texture layout entry read with `textureLoad` (non-filterable floats or
+/// integers), e.g. G-buffers and distance impostors.
+pub fn texture_entry(
+    binding: u32,
+    visibility: wgpu::ShaderStages,
+    sample_type: wgpu::TextureSampleType,
+    view_dimension: wgpu::TextureViewDimension,
+) -> wgpu::BindGroupLayoutEntry {
+    entry(
+        binding,
+        visibility,
+        wgpu::BindingType::Texture {
+            sample_type,
+            view_dimension,
+            multisampled: false,
+        },
+    )
+}
+
+/// The layout entries of a distance impostor at `binding` (normal+distance, D2 array of
+/// non-filterable floats) and `binding + 1` (object ids, D2 array of u32).
+pub fn impostor_entries(
+    binding: u32,
+    visibility: wgpu::ShaderStages,
+) -> [wgpu::BindGroupLayoutEntry; 2] {
+    [
+        texture_entry(
+            binding,
+            visibility,
+            wgpu::TextureSampleType::Float { filterable: false },
+            wgpu::TextureViewDimension::D2Array,
+        ),
+        texture_entry(
+            binding + 1,
+            visibility,
+            wgpu::TextureSampleType::Uint,
+            wgpu::TextureViewDimension::D2Array,
+        ),
+    ]
+}
+
+/// A bind-group entry of a whole buffer.
+pub fn buffer_binding(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
+    wgpu::BindGroupEntry {
+        binding,
+        resource: buffer.as_entire_binding(),
+    }
+}
+
+/// A bind-group entry of a texture view.
+pub fn texture_binding(binding: u32, view: &wgpu::TextureView) -> wgpu::BindGroupEntry<'_> {
+    wgpu::BindGroupEntry {
+        binding,
+        resource: wgpu::BindingResource::TextureView(view),
+    }
+}

@@ -70,6 +70,9 @@ pub enum GpuError {
         /// wgpu's message.
         message: String,
     },
+    /// A resource was asked for with arguments it cannot be built from.
+    #[error("invalid GPU resource request: {0}")]
+    Invalid(String),
     /// The profiler was asked for more passes or frames than it was sized for.
     #[error("profiler capacity exceeded: {0}")]
     ProfilerCapacity(String),

@@ -153,6 +153,86 @@ impl LightView {
     }
 }
 
+impl LightView {
+    /// One face of the light that just covers `points` (e.g. the vertices of the
+    /// caustic generators): an orthographic square around their projection for a
+    /// directional light, a perspective square cone towards them for a point or spot
+    /// light (a point light is treated as a spot aimed at them, so the specular objects
+    /// get the whole resolution instead of a sixth of a cube). None when `points` is
+    /// empty or a positional light sits among them (no cone can hold them).
+    pub fn fit_points(light: &Light, points: &[Vec3], resolution: u32) -> Option<Self> {
+        points.first()?;
+        match *light {
+            Light::Directional { direction, .. } => {
+                let dir = direction.normalize();
+                let up = any_up(dir);
+                let right = dir.cross(up).normalize();
+                let up = right.cross(dir);
+                let (mut lo, mut hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
+                for p in points {
+                    let q = Vec3::new(p.dot(right), p.dot(up), p.dot(dir));
+                    lo = lo.min(q);
+                    hi = hi.max(q);
+                }
+                // No margin: grid corners on the border of the view land on the generators' edges.
+                let half = 0.5 * (hi.x - lo.x).max(hi.y - lo.y) * (1.0 + 1e-5) + 1e-6;
+                let mid = 0.5 * (lo + hi);
+                let depth = (hi.z - lo.z).max(1e-3);
+                // The eye sits one depth before the nearest point, on the centre line.
+                let eye = right * mid.x + up * mid.y + dir * (lo.z - depth);
+                let view = Mat4::look_at_rh(eye, eye + dir, up);
+                let proj = Mat4::orthographic_rh(-half, half, -half, half, 0.0, 3.0 * depth);
+                Some(Self {
+                    projection: LightProjection::Orthographic,
+                    faces: vec![LightFace {
+                        view,
+                        proj,
+                        view_proj: proj * view,
+                    }],
+                    resolution,
+                    texel_size: 2.0 * half / resolution as f32,
+                    origin: eye + dir * depth,
+                })
+            }
+            Light::Point { position, .. } | Light::Spot { position, .. } => {
+                let centroid = points.iter().fold(Vec3::ZERO, |a, p| a + *p) / points.len() as f32;
+                let axis = (centroid - position).try_normalize()?;
+                let up = any_up(axis);
+                let right = axis.cross(up).normalize();
+                let up = right.cross(axis);
+                let (mut tan_max, mut near, mut far) = (0.0f32, f32::MAX, 0.0f32);
+                for p in points {
+                    let v = *p - position;
+                    let z = v.dot(axis);
+                    if z <= 1e-4 * v.length().max(1e-6) {
+                        return None;
+                    }
+                    tan_max = tan_max.max(v.dot(right).abs() / z).max(v.dot(up).abs() / z);
+                    near = near.min(z);
+                    far = far.max(v.length());
+                }
+                let fov = 2.0 * (tan_max * (1.0 + 1e-5) + 1e-6).atan();
+                if fov >= std::f32::consts::PI * 0.95 {
+                    return None;
+                }
+                let view = Mat4::look_at_rh(position, position + axis, up);
+                let proj = Mat4::perspective_rh(fov, 1.0, (near * 0.5).max(1e-4), far * 1.01);
+                Some(Self {
+                    projection: LightProjection::Perspective,
+                    faces: vec![LightFace {
+                        view,
+                        proj,
+                        view_proj: proj * view,
+                    }],
+                    resolution,
+                    texel_size: 2.0 * (fov * 0.5).tan() / resolution as f32,
+                    origin: position,
+                })
+            }
+        }
+    }
+}
+
 /// The targets of a G-buffer (one layer per view face).
 pub struct GBuffer {
     /// World position and hit flag.

@@ -24,6 +24,7 @@ mod context;
 mod error;
 pub mod frame;
 pub mod gbuffer;
+pub mod impostor;
 pub mod profiling;
 pub mod readback;
 pub mod renderer;
@@ -37,6 +38,7 @@ pub use context::{
 pub use error::GpuError;
 pub use frame::{Frame, ProfiledComputePass, ProfiledRenderPass};
 pub use gbuffer::{GBuffer, GBufferPass, LightProjection, LightView, ShadowMap};
+pub use impostor::{DistanceImpostor, ImpostorAtlas, ImpostorPass};
 pub use profiling::{FrameMode, FrameSample, PassProfiler, PassSample, PassStatistics};
 pub use renderer::{CountedPipeline, Renderer, RendererOptions, fill_constants, pass_desc};
 pub use scene_upload::GpuScene;

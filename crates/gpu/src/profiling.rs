@@ -11,7 +11,7 @@
 use crate::{GpuContext, GpuError};
 
 /// Most passes one frame may open.
-pub const MAX_PASSES_PER_FRAME: u32 = 32;
+pub const MAX_PASSES_PER_FRAME: u32 = 64;
 /// Values of one pipeline-statistics query, in `STATISTICS` bit order.
 const STATS_PER_QUERY: u64 = 5;
 /// The statistics gathered (results come back in this bit order).

@@ -1,1 +1,690 @@
-//! Photon hit location images shared by caustic-triangles and splatting: light-space photon paths through specular objects traced against distance maps.
+//! Photon hit location images, shared by `caustic-triangles` and `splatting`
+//! (Umenhoffer, Patow, Szirmay-Kalos, "Caustic Triangles on the GPU", §3–§4).
+//!
+//! Three pieces, each used by both methods so that they differ only in how the hits
+//! are reconstructed:
+//!
+//! * **Photon tracing** ([`PhotonHits`], `trace.wgsl`, §4.1): the scene is rasterized
+//!   from the light ([`GBufferPass::light_gbuffer`]) over a view fitted to the caustic
+//!   generator (orthographic for a directional light, one perspective face aimed at the
+//!   generator for a point/spot light outside it, the light's cube otherwise). For each
+//!   texel whose first surface is the generator, a compute pass reflects or refracts
+//!   the light ray, finds a closed refractor's exit point in the generator's own
+//!   distance map and the diffuse receiver in the distance map of the receivers around
+//!   the generator's centre (layered distance maps, §3, [`caustics_gpu::impostor`]),
+//!   and stores the landing point, the receiver's normal, the texel's flux (the power
+//!   through the texel × Fresnel transmittances or the mirror's reflectance), the
+//!   receiver's and the specular path's ids, and why a texel is invalid. One storage
+//!   buffer, allocated once; nothing is read back on the hot path.
+//! * **The caustic cube map** ([`CausticMap`], §4.2): six faces (a 3×2 atlas, the
+//!   impostors' face order and texel convention) around the same centre, into which a
+//!   method adds irradiance on the receiver (rgb, W/m²) and luminance × distance from
+//!   the centre (alpha), with additive blending.
+//! * **The camera pass** (`lookup.wgsl`, §4.3): each camera G-buffer pixel on a
+//!   diffuse surface looks the map up in the direction from the centre and takes a
+//!   texel's light only where the texel's (flux-weighted mean) distance matches the
+//!   pixel's distance within `distance_tolerance`: the paper's way to stop light
+//!   reconstructed on one surface from leaking onto a surface hidden behind it.
+//!   `distance_test = false` turns the test off, to show the leak.
+//!
+//! Scope: one light, one specular object (a mirror of any shape, a closed dielectric
+//! (sphere or mesh) with two refractions, or an open dielectric quad/heightfield with
+//! one), diffuse receivers of any shape. One specular event per interface: light
+//! reflected inside a refractor (total internal or Fresnel) is dropped, and so is a
+//! ray that meets a mirror generator a second time (the ring's opposite wall).
+
+mod cube_map;
+
+pub use cube_map::{CausticMap, face_origin};
+
+use bytemuck::{Pod, Zeroable};
+use caustics_gpu::binding::{impostor_entries, storage_entry, texture_entry, uniform_entry};
+use caustics_gpu::impostor::{DistanceImpostor, IMPOSTOR_TRACE_WGSL, ImpostorPass, objects_bounds};
+use caustics_gpu::wgpu::{self, util::DeviceExt};
+use caustics_gpu::{
+    Frame, GBuffer, GpuContext, LightProjection, LightView, Renderer, gbuffer::LightFace, shader,
+};
+use caustics_method::{Counters, MethodError, Unsupported};
+use caustics_scene::{Light, Mat4, Material, Scene, Shape, Vec3};
+
+/// Types shared by every photon-hit pass (`PhotonHit`, `CausticMapUniform`).
+pub const TYPES_WGSL: &str = include_str!("types.wgsl");
+/// The photon tracing pass.
+pub const TRACE_WGSL: &str = include_str!("trace.wgsl");
+/// The camera pass.
+pub const LOOKUP_WGSL: &str = include_str!("lookup.wgsl");
+
+/// A photon-hit pass's full WGSL: the shared GPU files, the impostor search, the
+/// photon-hit types, then the pass.
+pub fn compose(pass: &str) -> String {
+    shader::compose_method(&format!("{IMPOSTOR_TRACE_WGSL}\n{TYPES_WGSL}\n{pass}"))
+}
+
+/// Bytes of one `PhotonHit` (types.wgsl).
+pub const HIT_BYTES: u64 = 64;
+
+/// Relative tolerance of the distance-map searches: a secant result further than
+/// this × the map's reach from the stored surface is a jump across a depth
+/// discontinuity, not a hit.
+const SEARCH_TOLERANCE: f32 = 2e-3;
+
+/// Why texels are invalid, in the order of `HIT_*` in types.wgsl (counter names).
+const HIT_REASONS: [&str; 7] = [
+    "photon_hits",
+    "photons_missing_generator",
+    "photons_total_internal_reflection",
+    "photons_no_exit",
+    "photons_second_bounce",
+    "photons_no_receiver",
+    "photons_specular_receiver",
+];
+
+/// The settings shared by both photon-hit methods (each method's parameters carry
+/// them under the same names).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PhotonHitConfig {
+    /// Texels per side of the photon hit location image (per face).
+    pub resolution: u32,
+    /// Texels per side of each face of the two distance maps.
+    pub distance_map_size: u32,
+    /// Texels per side of each face of the caustic cube map.
+    pub cube_size: u32,
+    /// Accept caustic light only where the stored distance matches (§4.3).
+    pub distance_test: bool,
+    /// Relative tolerance of that test: |d_stored − d| ≤ tolerance × d.
+    pub distance_tolerance: f32,
+}
+
+impl PhotonHitConfig {
+    /// Range checks, with errors naming the parameter of `method`.
+    pub fn validate(&self, method: &'static str) -> Result<(), MethodError> {
+        let err = |message: String| Err(MethodError::Param { method, message });
+        if !(2..=1024).contains(&self.resolution) {
+            return err(format!(
+                "resolution: expected an integer in 2..=1024, got {}",
+                self.resolution
+            ));
+        }
+        if !(16..=2048).contains(&self.distance_map_size) {
+            return err(format!(
+                "distance_map_size: expected an integer in 16..=2048, got {}",
+                self.distance_map_size
+            ));
+        }
+        if !(16..=2048).contains(&self.cube_size) {
+            return err(format!(
+                "cube_size: expected an integer in 16..=2048, got {}",
+                self.cube_size
+            ));
+        }
+        if !(self.distance_tolerance.is_finite()
+            && self.distance_tolerance > 0.0
+            && self.distance_tolerance < 1.0)
+        {
+            return err(format!(
+                "distance_tolerance: expected a number in (0, 1), got {}",
+                self.distance_tolerance
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// How light passes the caustic generator.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GeneratorKind {
+    /// Reflected once.
+    Mirror,
+    /// Refracted in and out of a closed dielectric (sphere, mesh).
+    ClosedRefractor,
+    /// Refracted once into an open dielectric (quad, heightfield: water).
+    OpenRefractor,
+}
+
+/// The scene's one caustic generator and its kind, or why the scene is out of reach.
+pub fn caustic_generator(scene: &Scene) -> Result<(usize, GeneratorKind), Unsupported> {
+    if scene.lights.len() != 1 {
+        return Err(Unsupported(format!(
+            "needs exactly one light (one photon hit image), the scene has {}",
+            scene.lights.len()
+        )));
+    }
+    let mut generator = None;
+    let mut receivers = 0;
+    for (i, o) in scene.objects.iter().enumerate() {
+        let kind = match (scene.material(o), &o.shape) {
+            (Material::Diffuse { .. }, _) => {
+                receivers += 1;
+                continue;
+            }
+            (Material::Mirror { .. }, _) => GeneratorKind::Mirror,
+            (Material::Dielectric { .. }, Shape::Sphere { .. } | Shape::Mesh(_)) => {
+                GeneratorKind::ClosedRefractor
+            }
+            (Material::Dielectric { .. }, Shape::Quad { .. } | Shape::Heightfield(_)) => {
+                GeneratorKind::OpenRefractor
+            }
+            (Material::Dielectric { .. }, other) => {
+                return Err(Unsupported(format!(
+                    "objects[{i}] is a dielectric {}; photon hits refract through closed spheres and meshes or open quads and heightfields",
+                    other.kind()
+                )));
+            }
+        };
+        if let Some((first, _)) = generator {
+            return Err(Unsupported(format!(
+                "objects[{first}] and objects[{i}] are both specular; the photon hit image follows one caustic generator"
+            )));
+        }
+        generator = Some((i, kind));
+    }
+    if receivers == 0 {
+        return Err(Unsupported("the scene has no diffuse receiver".into()));
+    }
+    generator.ok_or_else(|| Unsupported("the scene has no specular object".into()))
+}
+
+/// Scene checks shared by both methods.
+pub fn check_scene(scene: &Scene) -> Result<(), Unsupported> {
+    caustic_generator(scene).map(|_| ())
+}
+
+fn any_up(dir: Vec3) -> Vec3 {
+    if dir.y.abs() < 0.99 { Vec3::Y } else { Vec3::Z }
+}
+
+/// The light's view of the generator (a sphere `center`, `radius`), `resolution`
+/// texels per side, and tan of its half field of view (1 for cube faces, 0 for
+/// orthographic views). Every texel then looks at the generator where possible, so
+/// the hit resolution is spent on it, as the paper renders the generator from the light.
+pub fn photon_view(
+    light: &Light,
+    scene_bounds: &caustics_scene::Aabb,
+    center: Vec3,
+    radius: f32,
+    resolution: u32,
+) -> (LightView, f32) {
+    let r = radius * 1.02;
+    // Far enough back that objects between the light and the generator are drawn
+    // (they shadow it).
+    let back = (scene_bounds.center() - center).length() + scene_bounds.bounding_sphere_radius();
+    match *light {
+        Light::Directional { direction, .. } => {
+            let eye = center - direction * (back + r);
+            let view = Mat4::look_at_rh(eye, center, any_up(direction));
+            let proj = Mat4::orthographic_rh(-r, r, -r, r, 0.0, back + 2.0 * r);
+            let face = LightFace {
+                view,
+                proj,
+                view_proj: proj * view,
+            };
+            (
+                LightView {
+                    projection: LightProjection::Orthographic,
+                    faces: vec![face],
+                    resolution,
+                    texel_size: 2.0 * r / resolution as f32,
+                    origin: center,
+                },
+                0.0,
+            )
+        }
+        Light::Point { position, .. } | Light::Spot { position, .. } => {
+            let to = center - position;
+            let dist = to.length();
+            if dist > r * 1.01 && (r / dist).asin() < 80f32.to_radians() {
+                let half = (r / dist).asin();
+                let far = dist + r;
+                let near = (far * 1e-4).max(1e-4);
+                let view = Mat4::look_at_rh(position, center, any_up(to / dist));
+                let proj = Mat4::perspective_rh(2.0 * half, 1.0, near, far);
+                let tan_half = half.tan();
+                let face = LightFace {
+                    view,
+                    proj,
+                    view_proj: proj * view,
+                };
+                (
+                    LightView {
+                        projection: LightProjection::Perspective,
+                        faces: vec![face],
+                        resolution,
+                        texel_size: 2.0 * tan_half / resolution as f32,
+                        origin: position,
+                    },
+                    tan_half,
+                )
+            } else {
+                (LightView::fit(light, scene_bounds, resolution), 1.0)
+            }
+        }
+    }
+}
+
+/// Matches `TraceUniform` in trace.wgsl.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct TraceUniform {
+    layers: u32,
+    resolution: u32,
+    generator: u32,
+    flags: u32,
+    center: [f32; 4],
+    generator_center: [f32; 4],
+    view: [f32; 4],
+}
+
+/// Pass names of one method's photon-hit passes ("<method>/<pass>").
+struct PassNames {
+    gbuffer: String,
+    maps: String,
+    trace: String,
+}
+
+/// The photon hit location image of a scene and the passes that fill it.
+pub struct PhotonHits {
+    names: PassNames,
+    light_gbuffer: GBuffer,
+    impostor_pass: ImpostorPass,
+    generator_map: Option<DistanceImpostor>,
+    receiver_map: DistanceImpostor,
+    trace_pipeline: wgpu::ComputePipeline,
+    trace_bind: wgpu::BindGroup,
+    /// `array<PhotonHit>`, one per texel of every face of the light view (face-major,
+    /// then rows, then columns).
+    pub hits: wgpu::Buffer,
+    counters: wgpu::Buffer,
+    /// Faces of the light view (1, or 6 for a light inside the generator's bounds).
+    pub layers: u32,
+    /// Texels per side of each face.
+    pub resolution: u32,
+    /// The distance maps' reference point: the generator's centre (m).
+    pub center: Vec3,
+    /// How far from `center` a receiver can lie (m).
+    pub reach: f32,
+    /// The generator (object index).
+    pub generator: usize,
+    /// The texel size of the light view (m, or tan units for perspective faces).
+    pub texel_size: f32,
+    bytes: u64,
+}
+
+impl PhotonHits {
+    /// Builds the light G-buffer, the two distance maps and the tracing pass for the
+    /// renderer's scene; pass names start with `method` ("<method>/trace_photons").
+    pub fn new(
+        ctx: &GpuContext,
+        renderer: &Renderer,
+        method: &'static str,
+        config: &PhotonHitConfig,
+    ) -> Result<Self, MethodError> {
+        let gpu_scene = renderer.scene();
+        let scene = &gpu_scene.scene;
+        let (generator, kind) =
+            caustic_generator(scene).map_err(|reason| MethodError::Unsupported {
+                method,
+                scene: scene.name.clone(),
+                reason,
+            })?;
+        let device = &ctx.device;
+        let center = objects_bounds(gpu_scene, &[generator])
+            .map(|b| b.center())
+            .ok_or_else(|| MethodError::Unsupported {
+                method,
+                scene: scene.name.clone(),
+                reason: Unsupported(format!("objects[{generator}] has no triangles")),
+            })?;
+        let radius = gpu_scene.meshes[generator]
+            .positions
+            .iter()
+            .map(|p| (*p - center).length())
+            .fold(0.0f32, f32::max);
+        let receivers: Vec<usize> = scene
+            .objects
+            .iter()
+            .enumerate()
+            .filter(|(_, o)| !scene.material(o).is_specular())
+            .map(|(i, _)| i)
+            .collect();
+        let (view, tan_half) = photon_view(
+            &scene.lights[0],
+            &scene.bounds(),
+            center,
+            radius,
+            config.resolution,
+        );
+        ctx.checked("photon hits setup", || {
+            let light_gbuffer = renderer.gbuffer_pass().light_gbuffer(device, &view);
+            let impostor_pass = ImpostorPass::new(device);
+            let generator_map = match kind {
+                GeneratorKind::OpenRefractor => None,
+                _ => Some(impostor_pass.impostor_around(
+                    device,
+                    gpu_scene,
+                    &[generator],
+                    center,
+                    config.distance_map_size,
+                )?),
+            };
+            let receiver_map = impostor_pass.impostor_around(
+                device,
+                gpu_scene,
+                &receivers,
+                center,
+                config.distance_map_size,
+            )?;
+            let layers = light_gbuffer.layers();
+            let texels = layers as u64 * config.resolution as u64 * config.resolution as u64;
+            let flags = u32::from(kind == GeneratorKind::ClosedRefractor)
+                | (u32::from(view.projection == LightProjection::Orthographic) << 1);
+            let generator_reach = generator_map.as_ref().map_or(0.0, |m| m.reach);
+            let reach = receiver_map.reach;
+            let uniform = TraceUniform {
+                layers,
+                resolution: config.resolution,
+                generator: generator as u32,
+                flags,
+                center: center.extend(receiver_map.reach).to_array(),
+                generator_center: center.extend(generator_reach).to_array(),
+                view: [view.texel_size, tan_half, 0.0, SEARCH_TOLERANCE],
+            };
+            let uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("photon trace params"),
+                contents: bytemuck::bytes_of(&uniform),
+                usage: wgpu::BufferUsages::UNIFORM,
+            });
+            let hits = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("photon hits"),
+                size: texels * HIT_BYTES,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            });
+            let counters = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("photon trace counters"),
+                size: 4 * 8,
+                usage: wgpu::BufferUsages::STORAGE
+                    | wgpu::BufferUsages::COPY_SRC
+                    | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            let cs = wgpu::ShaderStages::COMPUTE;
+            let float = wgpu::TextureSampleType::Float { filterable: false };
+            let array = wgpu::TextureViewDimension::D2Array;
+            let [g0, g1] = impostor_entries(4, cs);
+            let [r0, r1] = impostor_entries(6, cs);
+            let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("photon trace"),
+                entries: &[
+                    uniform_entry(0, cs),
+                    texture_entry(1, cs, float, array),
+                    texture_entry(2, cs, float, array),
+                    texture_entry(3, cs, wgpu::TextureSampleType::Uint, array),
+                    g0,
+                    g1,
+                    r0,
+                    r1,
+                    storage_entry(8, false, cs),
+                    storage_entry(9, false, cs),
+                ],
+            });
+            let gen_map = generator_map.as_ref().unwrap_or(&receiver_map);
+            let position = light_gbuffer.position.array_view();
+            let normal = light_gbuffer.normal.array_view();
+            let ids = light_gbuffer.ids.array_view();
+            let tex = |binding, view| wgpu::BindGroupEntry {
+                binding,
+                resource: wgpu::BindingResource::TextureView(view),
+            };
+            let trace_bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("photon trace"),
+                layout: &layout,
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: uniform.as_entire_binding(),
+                    },
+                    tex(1, &position),
+                    tex(2, &normal),
+                    tex(3, &ids),
+                    tex(4, &gen_map.normal_distance.view),
+                    tex(5, &gen_map.object_ids.view),
+                    tex(6, &receiver_map.normal_distance.view),
+                    tex(7, &receiver_map.object_ids.view),
+                    wgpu::BindGroupEntry {
+                        binding: 8,
+                        resource: hits.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 9,
+                        resource: counters.as_entire_binding(),
+                    },
+                ],
+            });
+            let module = shader::module(device, "photon-hits trace.wgsl", compose(TRACE_WGSL));
+            let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("photon trace"),
+                bind_group_layouts: &[Some(renderer.frame_layout()), Some(&layout)],
+                immediate_size: 0,
+            });
+            let trace_pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some("photon trace"),
+                layout: Some(&pipeline_layout),
+                module: &module,
+                entry_point: Some("trace_photons"),
+                compilation_options: Default::default(),
+                cache: None,
+            });
+            let bytes = light_gbuffer.bytes()
+                + generator_map.as_ref().map_or(0, DistanceImpostor::bytes)
+                + receiver_map.bytes()
+                + hits.size()
+                + counters.size()
+                + uniform.size();
+            Ok::<_, caustics_gpu::GpuError>(Self {
+                names: PassNames {
+                    gbuffer: format!("{method}/light_gbuffer"),
+                    maps: format!("{method}/distance_maps"),
+                    trace: format!("{method}/trace_photons"),
+                },
+                light_gbuffer,
+                impostor_pass,
+                generator_map,
+                receiver_map,
+                trace_pipeline,
+                trace_bind,
+                hits,
+                counters,
+                layers,
+                resolution: config.resolution,
+                center,
+                reach,
+                generator,
+                texel_size: view.texel_size,
+                bytes,
+            })
+        })?
+        .map_err(MethodError::Gpu)
+    }
+
+    /// Texels of the photon hit image (all faces).
+    pub fn texels(&self) -> u32 {
+        self.layers * self.resolution * self.resolution
+    }
+
+    /// Records the light G-buffer, the two distance maps (rebuilt every frame, as
+    /// for a dynamic scene) and the tracing pass.
+    pub fn record(&self, frame: &mut Frame<'_>) -> Result<(), MethodError> {
+        let renderer = frame.renderer;
+        let scene = renderer.scene();
+        renderer
+            .gbuffer_pass()
+            .record(frame, &self.names.gbuffer, scene, &self.light_gbuffer)?;
+        if let Some(g) = &self.generator_map {
+            self.impostor_pass
+                .record(frame, &self.names.maps, scene, g)?;
+        }
+        self.impostor_pass
+            .record(frame, &self.names.maps, scene, &self.receiver_map)?;
+        frame.encoder.clear_buffer(&self.counters, 0, None);
+        let mut pass = frame.compute_pass(&self.names.trace)?;
+        pass.set_pipeline(&self.trace_pipeline);
+        pass.set_bind_group(0, renderer.frame_bind_group(), &[]);
+        pass.set_bind_group(1, &self.trace_bind, &[]);
+        pass.dispatch_workgroups(self.texels().div_ceil(64), 1, 1);
+        Ok(())
+    }
+
+    /// Counters of the last frame: texels, valid hits and why the others are invalid.
+    pub fn counters(&self, ctx: &GpuContext) -> Result<Counters, MethodError> {
+        let c = caustics_gpu::readback::read_buffer_u32(
+            ctx,
+            &self.counters,
+            self.counters.size(),
+            "photon trace counters",
+        )?;
+        let mut out = Counters::new();
+        out.insert("photon_texels".into(), self.texels() as u64);
+        for (name, v) in HIT_REASONS.iter().zip(&c) {
+            out.insert((*name).into(), *v as u64);
+        }
+        Ok(out)
+    }
+
+    /// Reads the hit image back (tests and figures; never on the hot path).
+    pub fn read_hits(&self, ctx: &GpuContext) -> Result<Vec<PhotonHit>, MethodError> {
+        let bytes = caustics_gpu::readback::read_buffer_bytes(
+            ctx,
+            &self.hits,
+            self.hits.size(),
+            "photon hits",
+        )?;
+        Ok(bytemuck::pod_collect_to_vec(&bytes))
+    }
+
+    /// Bytes of GPU memory owned.
+    pub fn bytes(&self) -> u64 {
+        self.bytes
+    }
+}
+
+/// `PhotonHit` of types.wgsl, as read back.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct PhotonHit {
+    /// Landing point (m) and its distance from the map centre (0: invalid).
+    pub position: [f32; 4],
+    /// Receiver normal towards the arriving light; w: texel footprint (m²).
+    pub normal: [f32; 4],
+    /// Flux (W) per channel; w unused.
+    pub flux: [f32; 4],
+    /// Receiver object (`u32::MAX` if invalid), path id, invalid reason, unused.
+    pub ids: [u32; 4],
+}
+
+impl PhotonHit {
+    /// Whether the texel holds a photon landing on a receiver.
+    pub fn valid(&self) -> bool {
+        self.ids[0] != u32::MAX
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shaders_validate() -> Result<(), String> {
+        shader::validate_wgsl("trace.wgsl", &compose(TRACE_WGSL))?;
+        shader::validate_wgsl("lookup.wgsl", &compose(LOOKUP_WGSL))
+    }
+
+    #[test]
+    fn bad_config_names_the_parameter() {
+        let good = PhotonHitConfig {
+            resolution: 128,
+            distance_map_size: 256,
+            cube_size: 512,
+            distance_test: true,
+            distance_tolerance: 0.05,
+        };
+        assert!(good.validate("m").is_ok());
+        for (bad, needle) in [
+            (
+                PhotonHitConfig {
+                    resolution: 1,
+                    ..good
+                },
+                "resolution",
+            ),
+            (
+                PhotonHitConfig {
+                    distance_map_size: 8,
+                    ..good
+                },
+                "distance_map_size",
+            ),
+            (
+                PhotonHitConfig {
+                    cube_size: 4096,
+                    ..good
+                },
+                "cube_size",
+            ),
+            (
+                PhotonHitConfig {
+                    distance_tolerance: 0.0,
+                    ..good
+                },
+                "distance_tolerance",
+            ),
+        ] {
+            let msg = bad.validate("m").expect_err(needle).to_string();
+            assert!(msg.contains(needle), "{msg}");
+        }
+    }
+
+    #[test]
+    fn directional_view_is_fitted_to_the_generator() {
+        let light = Light::Directional {
+            direction: Vec3::new(0.0, -1.0, 0.0),
+            irradiance: Vec3::ONE,
+        };
+        let bounds = caustics_scene::Aabb {
+            min: Vec3::splat(-10.0),
+            max: Vec3::splat(10.0),
+        };
+        let (v, tan_half) = photon_view(&light, &bounds, Vec3::Y, 1.0, 100);
+        assert_eq!(v.projection, LightProjection::Orthographic);
+        assert_eq!(tan_half, 0.0);
+        assert!((v.texel_size - 2.04 / 100.0).abs() < 1e-6);
+        // The generator's centre projects to the middle of the view.
+        let c = v.faces[0].view_proj.project_point3(Vec3::Y);
+        assert!(c.x.abs() < 1e-5 && c.y.abs() < 1e-5 && (0.0..=1.0).contains(&c.z));
+    }
+
+    #[test]
+    fn point_light_inside_the_generator_uses_the_cube() {
+        let bounds = caustics_scene::Aabb {
+            min: Vec3::splat(-3.0),
+            max: Vec3::splat(3.0),
+        };
+        let inside = Light::Point {
+            position: Vec3::ZERO,
+            intensity: Vec3::ONE,
+        };
+        assert_eq!(
+            photon_view(&inside, &bounds, Vec3::ZERO, 1.0, 8)
+                .0
+                .faces
+                .len(),
+            6
+        );
+        let outside = Light::Point {
+            position: Vec3::new(0.0, 3.0, 0.0),
+            intensity: Vec3::ONE,
+        };
+        let (v, tan_half) = photon_view(&outside, &bounds, Vec3::ZERO, 1.0, 8);
+        assert_eq!(v.faces.len(), 1);
+        assert!((tan_half - (1.02f32 / 3.0).asin().tan()).abs() < 1e-5);
+    }
+}

@@ -1,0 +1,604 @@
+// Beam generation (Sect. 4): the projected grid in the light's uv space, refined level
+// by level by the split oracle (Sect. 4.2), then each leaf triangle becomes one beam
+// per light-path family with its beam space, area function and hull (Sect. 4.3).
+// The paper refines in a geometry shader with stream-out; here each level is four
+// compute dispatches (decide, scan, emit, advance) with a deterministic prefix sum
+// instead of stream-out order, so the same beams land in the same slots every frame.
+
+@group(1) @binding(6) var<storage, read_write> candidates_a: array<Candidate>;
+@group(1) @binding(7) var<storage, read_write> candidates_b: array<Candidate>;
+@group(1) @binding(8) var<storage, read_write> actions: array<u32>;
+@group(1) @binding(9) var<storage, read_write> offsets: array<vec2<u32>>;
+@group(1) @binding(10) var<storage, read_write> control: array<atomic<u32>>;
+@group(1) @binding(11) var<storage, read_write> beams: array<Beam>;
+// Indirect arguments: words 0..3 the dispatch over candidates, 4..7 the hull draw.
+// A group of its own, bound only to the kernels that write it (init_grid, advance,
+// finalize): a buffer cannot be storage and indirect in the same dispatch.
+@group(2) @binding(0) var<storage, read_write> indirect_args: array<u32, 8>;
+
+// Words of `control` (mirrors crates/beams/src/gpu_types.rs).
+const C_LEVEL: u32 = 8u;
+const C_COUNT: u32 = 9u;         // candidates in the current list
+const C_NEXT_COUNT: u32 = 10u;   // candidates of the next level
+const C_BEAM_BASE: u32 = 11u;    // first beam slot of this level's leaves
+const C_BEAM_TOTAL: u32 = 12u;   // beams after this level
+const C_OVERFLOW_CANDIDATES: u32 = 13u;
+const C_OVERFLOW_BEAMS: u32 = 14u;
+const C_BEAMS_PER_LEVEL: u32 = 15u;  // 5 words, levels 0..4
+const C_TIGHT: u32 = 20u;
+const C_PRISM: u32 = 21u;
+const C_DROPPED_INVALID: u32 = 22u;
+const C_DROPPED_DISCONTINUITY: u32 = 23u;
+const C_SPLIT_DISCONTINUITY: u32 = 24u;
+const C_SPLIT_ENERGY: u32 = 25u;
+const C_SPLIT_CAMERA: u32 = 26u;
+const C_CANDIDATES_TOTAL: u32 = 27u;
+const C_DROPPED_NO_RECEIVER: u32 = 28u;
+
+const ACTION_SPLIT: u32 = 4u;
+const SPLIT_DISCONTINUITY: u32 = 1u;
+const SPLIT_ENERGY: u32 = 2u;
+const SPLIT_CAMERA: u32 = 4u;
+
+fn level_parity() -> u32 {
+    return atomicLoad(&control[C_LEVEL]) & 1u;
+}
+
+fn load_candidate(i: u32) -> Candidate {
+    if level_parity() == 0u {
+        return candidates_a[i];
+    }
+    return candidates_b[i];
+}
+
+fn store_child(i: u32, c: Candidate) {
+    if level_parity() == 0u {
+        candidates_b[i] = c;
+    } else {
+        candidates_a[i] = c;
+    }
+}
+
+fn set_dispatch(count: u32) {
+    indirect_args[0] = (count + 63u) / 64u;
+    indirect_args[1] = 1u;
+    indirect_args[2] = 1u;
+}
+
+@compute @workgroup_size(64)
+fn init_grid(@builtin(global_invocation_id) id: vec3<u32>) {
+    let n = u.grid;
+    let count = 2u * n * n;
+    if id.x == 0u {
+        atomicStore(&control[C_LEVEL], 0u);
+        atomicStore(&control[C_COUNT], count);
+        atomicStore(&control[C_BEAM_BASE], 0u);
+        atomicStore(&control[C_BEAM_TOTAL], 0u);
+        atomicStore(&control[C_CANDIDATES_TOTAL], count);
+        set_dispatch(count);
+    }
+    if id.x >= count {
+        return;
+    }
+    let cell = id.x / 2u;
+    let x = f32(cell % n);
+    let y = f32(cell / n);
+    let s = 1.0 / f32(n);
+    let a = vec2<f32>(x, y) * s;
+    let b = vec2<f32>(x + 1.0, y) * s;
+    let c = vec2<f32>(x, y + 1.0) * s;
+    let d = vec2<f32>(x + 1.0, y + 1.0) * s;
+    var t: Candidate;
+    if (id.x & 1u) == 0u {
+        t.uv01 = vec4<f32>(a, b);
+        t.uv2_level = vec4<f32>(c, 0.0, 0.0);
+    } else {
+        t.uv01 = vec4<f32>(b, d);
+        t.uv2_level = vec4<f32>(c, 0.0, 0.0);
+    }
+    candidates_a[id.x] = t;
+}
+
+// Flux of a beam whose rays all carried weight 1: the source measure of its uv
+// triangle (m² perpendicular to a directional light; sr for a positional light, the
+// exact solid angle of the spherical triangle, Van Oosterom & Strackee 1983).
+fn source_measure(uv0: vec2<f32>, uv1: vec2<f32>, uv2: vec2<f32>) -> f32 {
+    if u.light_dir_kind.w < 0.5 {
+        let e1 = uv1 - uv0;
+        let e2 = uv2 - uv0;
+        return 0.5 * abs(e1.x * e2.y - e1.y * e2.x) * u.light_power.w;
+    }
+    let w0 = light_ray(uv0).dir;
+    let w1 = light_ray(uv1).dir;
+    let w2 = light_ray(uv2).dir;
+    let num = abs(dot(w0, cross(w1, w2)));
+    let den = 1.0 + dot(w0, w1) + dot(w1, w2) + dot(w2, w0);
+    return 2.0 * atan2(num, den);
+}
+
+struct Corners {
+    p: array<PathEnd, 3>,
+}
+
+fn trace_corners(c: Candidate, family: u32) -> Corners {
+    var k: Corners;
+    let uv = array<vec2<f32>, 3>(c.uv01.xy, c.uv01.zw, c.uv2_level.xy);
+    for (var i = 0u; i < 3u; i++) {
+        k.p[i] = trace_path(uv[i], family);
+    }
+    return k;
+}
+
+fn corners_geometry(k: Corners) -> BeamGeometry {
+    return beam_geometry(k.p[0].origin, k.p[1].origin, k.p[2].origin,
+                         k.p[0].dir, k.p[1].dir, k.p[2].dir);
+}
+
+// Extrusion heights of the edges: where each meets its receiver (Sect. 4.3).
+fn end_heights(k: Corners, g: BeamGeometry) -> vec3<f32> {
+    return vec3<f32>(k.p[0].t_end * dot(k.p[0].dir, g.n),
+                     k.p[1].t_end * dot(k.p[1].dir, g.n),
+                     k.p[2].t_end * dot(k.p[2].dir, g.n));
+}
+
+// All three corners valid and on the same path (same objects met, same receiver).
+fn consistent(k: Corners) -> bool {
+    return k.p[0].valid && k.p[1].valid && k.p[2].valid
+        && k.p[0].signature == k.p[1].signature && k.p[0].signature == k.p[2].signature
+        && k.p[0].end_object == k.p[1].end_object && k.p[0].end_object == k.p[2].end_object;
+}
+
+// Without a medium a beam that meets no receiver adds nothing to any image.
+fn lands(k: Corners) -> bool {
+    return u.sigma_t.w > 0.5 || k.p[0].end_object != NONE;
+}
+
+// Families a leaf emits: bit 0 the main path, bit 1 the Fresnel reflection.
+fn leaf_mask(c: Candidate, main: Corners) -> u32 {
+    var mask = 0u;
+    if consistent(main) && corners_geometry(main).ok {
+        if lands(main) {
+            mask |= 1u;
+        } else {
+            atomicAdd(&control[C_DROPPED_NO_RECEIVER], 1u);
+        }
+    }
+    let first = u.specular[specular_slot_of(main.p[0].first_object)];
+    if u.reflections == 1u && main.p[0].valid && first.kind == MAT_DIELECTRIC
+        && main.p[0].first_object == main.p[1].first_object
+        && main.p[0].first_object == main.p[2].first_object {
+        let refl = trace_corners(c, FAMILY_REFLECTED);
+        if consistent(refl) && corners_geometry(refl).ok {
+            if lands(refl) {
+                mask |= 2u;
+            } else {
+                atomicAdd(&control[C_DROPPED_NO_RECEIVER], 1u);
+            }
+        }
+    }
+    return mask;
+}
+
+// The split oracle (Sect. 4.2). Returns which criteria ask for a split.
+fn split_reasons(c: Candidate, k: Corners, level: u32) -> u32 {
+    var reasons = 0u;
+    let valid = u32(k.p[0].valid) + u32(k.p[1].valid) + u32(k.p[2].valid);
+    // Discontinuities of the specular surfaces: a silhouette (some corners miss),
+    // different objects on the way, normals or depths that differ strongly.
+    if (u.split_flags & SPLIT_DISCONTINUITY) != 0u {
+        if valid > 0u && valid < 3u {
+            // Only the corners can tell: a corner that misses while another hits is a
+            // silhouette; split so the leaves follow it.
+            reasons |= SPLIT_DISCONTINUITY;
+        } else if valid == 3u {
+            if !consistent(k) {
+                reasons |= SPLIT_DISCONTINUITY;
+            }
+            for (var i = 0u; i < 3u; i++) {
+                let j = (i + 1u) % 3u;
+                if dot(k.p[i].first_normal, k.p[j].first_normal) < u.split_cos_normal {
+                    reasons |= SPLIT_DISCONTINUITY;
+                }
+                let delta = k.p[i].first_point - k.p[j].first_point;
+                let along = dot(delta, k.p[i].light_dir);
+                let lateral = length(delta - along * k.p[i].light_dir);
+                if abs(k.p[i].first_depth - k.p[j].first_depth) > u.split_depth_slope * max(lateral, 1e-9) {
+                    reasons |= SPLIT_DISCONTINUITY;
+                }
+            }
+        }
+    }
+    if valid < 3u {
+        return reasons;
+    }
+    // Photon-hit differences (Sect. 6): where the light of an edge midpoint lands
+    // against the beam's linear prediction (the mean of the corners' landings), in
+    // camera pixels. Catches the caustic curves a beam cannot represent linearly.
+    if (u.split_flags & SPLIT_DISCONTINUITY) != 0u && reasons == 0u {
+        let uv = array<vec2<f32>, 3>(c.uv01.xy, c.uv01.zw, c.uv2_level.xy);
+        for (var i = 0u; i < 3u; i++) {
+            let j = (i + 1u) % 3u;
+            let m = trace_path(0.5 * (uv[i] + uv[j]), FAMILY_MAIN);
+            if !m.valid || m.signature != k.p[i].signature || m.end_object != k.p[i].end_object {
+                reasons |= SPLIT_DISCONTINUITY;
+                break;
+            }
+            let land_i = k.p[i].origin + k.p[i].dir * k.p[i].t_end;
+            let land_j = k.p[j].origin + k.p[j].dir * k.p[j].t_end;
+            let land_m = m.origin + m.dir * m.t_end;
+            let deviation = distance(land_m, 0.5 * (land_i + land_j));
+            let dist = max(distance(land_m, frame.eye.xyz), 1e-6);
+            if deviation > u.split_hit_px * dist * u.pixel_angle {
+                reasons |= SPLIT_DISCONTINUITY;
+                break;
+            }
+        }
+    }
+    let g = corners_geometry(k);
+    // Beam energy: the flux share of the beam times how strongly it focuses.
+    if (u.split_flags & SPLIT_ENERGY) != 0u && g.ok {
+        // How much the beam concentrates its flux where it is seen: on the receiver
+        // (A(0)/A(y_end)) for surface caustics, at its narrowest (A(0)/min A) in a
+        // medium, where the whole beam is visible.
+        let ends = end_heights(k, g);
+        let a0 = area_at(g.a, 0.0);
+        var a_seen = abs(area_at(g.a, (ends.x + ends.y + ends.z) / 3.0));
+        if u.sigma_t.w > 0.5 {
+            a_seen = min_abs_area(g.a, max(max(ends.x, ends.y), ends.z));
+        }
+        let focus = a0 / max(a_seen, a0 / u.max_focus);
+        let mean_w = (k.p[0].weight + k.p[1].weight + k.p[2].weight) / 3.0;
+        let share = luminance(mean_w) / max(luminance(u.light_power.xyz), 1e-20)
+            * exp2(-2.0 * f32(level));
+        if share * focus > u.split_energy {
+            reasons |= SPLIT_ENERGY;
+        }
+    }
+    // Camera: the projected size of the beam, measured at the point of its central
+    // ray closest to the eye.
+    if (u.split_flags & SPLIT_CAMERA) != 0u {
+        let center = (k.p[0].origin + k.p[1].origin + k.p[2].origin) / 3.0;
+        let dir = normalize(k.p[0].dir + k.p[1].dir + k.p[2].dir);
+        let t_end = (k.p[0].t_end + k.p[1].t_end + k.p[2].t_end) / 3.0;
+        let eye = frame.eye.xyz;
+        let s = clamp(dot(eye - center, dir), 0.0, t_end);
+        let dist = max(distance(center + s * dir, eye), 1e-6);
+        let size = max(max(distance(k.p[0].origin, k.p[1].origin), distance(k.p[1].origin, k.p[2].origin)),
+                       distance(k.p[2].origin, k.p[0].origin));
+        if size / (dist * u.pixel_angle) > u.split_camera_px {
+            reasons |= SPLIT_CAMERA;
+        }
+    }
+    return reasons;
+}
+
+@compute @workgroup_size(64)
+fn decide(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x >= atomicLoad(&control[C_COUNT]) {
+        return;
+    }
+    let c = load_candidate(id.x);
+    let level = u32(c.uv2_level.z);
+    let k = trace_corners(c, FAMILY_MAIN);
+    if level < u.levels {
+        let reasons = split_reasons(c, k, level);
+        if reasons != 0u {
+            if (reasons & SPLIT_DISCONTINUITY) != 0u { atomicAdd(&control[C_SPLIT_DISCONTINUITY], 1u); }
+            if (reasons & SPLIT_ENERGY) != 0u { atomicAdd(&control[C_SPLIT_ENERGY], 1u); }
+            if (reasons & SPLIT_CAMERA) != 0u { atomicAdd(&control[C_SPLIT_CAMERA], 1u); }
+            actions[id.x] = ACTION_SPLIT;
+            return;
+        }
+    }
+    let mask = leaf_mask(c, k);
+    if mask == 0u {
+        let valid = u32(k.p[0].valid) + u32(k.p[1].valid) + u32(k.p[2].valid);
+        if valid == 0u {
+            atomicAdd(&control[C_DROPPED_INVALID], 1u);
+        } else if !consistent(k) {
+            atomicAdd(&control[C_DROPPED_DISCONTINUITY], 1u);
+        }
+    }
+    actions[id.x] = mask;
+}
+
+const SCAN_THREADS: u32 = 256u;
+var<workgroup> scan_children: array<u32, 256>;
+var<workgroup> scan_beams: array<u32, 256>;
+
+fn action_counts(a: u32) -> vec2<u32> {
+    if a == ACTION_SPLIT {
+        return vec2<u32>(4u, 0u);
+    }
+    return vec2<u32>(0u, (a & 1u) + ((a >> 1u) & 1u));
+}
+
+// One workgroup: exclusive prefix sums of children and beams over the candidates, in
+// candidate order (deterministic slots), with overflow counted, never silent.
+@compute @workgroup_size(256)
+fn scan(@builtin(local_invocation_index) lid: u32) {
+    let n = atomicLoad(&control[C_COUNT]);
+    let chunk = (n + SCAN_THREADS - 1u) / SCAN_THREADS;
+    let start = min(lid * chunk, n);
+    let end = min(start + chunk, n);
+    var sum = vec2<u32>(0u);
+    for (var i = start; i < end; i++) {
+        sum += action_counts(actions[i]);
+    }
+    scan_children[lid] = sum.x;
+    scan_beams[lid] = sum.y;
+    workgroupBarrier();
+    // Hillis-Steele inclusive scan over the 256 partial sums.
+    for (var step = 1u; step < SCAN_THREADS; step <<= 1u) {
+        var add = vec2<u32>(0u);
+        if lid >= step {
+            add = vec2<u32>(scan_children[lid - step], scan_beams[lid - step]);
+        }
+        workgroupBarrier();
+        scan_children[lid] += add.x;
+        scan_beams[lid] += add.y;
+        workgroupBarrier();
+    }
+    var running = vec2<u32>(scan_children[lid], scan_beams[lid]) - sum;
+    for (var i = start; i < end; i++) {
+        offsets[i] = running;
+        running += action_counts(actions[i]);
+    }
+    if lid == SCAN_THREADS - 1u {
+        let children = scan_children[lid];
+        let new_beams = scan_beams[lid];
+        let capacity = u.max_beams;
+        let next = min(children, capacity);
+        atomicAdd(&control[C_OVERFLOW_CANDIDATES], children - next);
+        atomicStore(&control[C_NEXT_COUNT], next);
+        let base = atomicLoad(&control[C_BEAM_TOTAL]);
+        let total = min(base + new_beams, capacity);
+        atomicAdd(&control[C_OVERFLOW_BEAMS], base + new_beams - total);
+        atomicStore(&control[C_BEAM_BASE], base);
+        atomicStore(&control[C_BEAM_TOTAL], total);
+        atomicAdd(&control[C_CANDIDATES_TOTAL], next);
+    }
+}
+
+// Hull (Sect. 4.3) ------------------------------------------------------------------
+
+fn plane_side(p: vec3<f32>, origin: vec3<f32>, m: vec3<f32>) -> f32 {
+    return dot(p - origin, m);
+}
+
+// Ernst et al.'s touching plane through base edge (a, b): the plane through the edge
+// and one top vertex that leaves every top vertex on the inner side (vertex c's side).
+// Returns the outward unit normal (xyz) and offset (w).
+fn prism_plane(va: vec3<f32>, vb: vec3<f32>, vc: vec3<f32>, top: array<vec3<f32>, 3>, n: vec3<f32>, eps: f32) -> vec4<f32> {
+    for (var k = 0u; k < 3u; k++) {
+        var m = cross(vb - va, top[k] - va);
+        let len = length(m);
+        if len < 1e-12 {
+            continue;
+        }
+        m /= len;
+        if plane_side(vc, va, m) > 0.0 {
+            m = -m;
+        }
+        var ok = true;
+        for (var j = 0u; j < 3u; j++) {
+            if plane_side(top[j], va, m) > eps {
+                ok = false;
+            }
+        }
+        if ok {
+            return vec4<f32>(m, dot(m, va));
+        }
+    }
+    var m = normalize(cross(vb - va, n));
+    if plane_side(vc, va, m) > 0.0 {
+        m = -m;
+    }
+    return vec4<f32>(m, dot(m, va));
+}
+
+fn three_planes(p1: vec4<f32>, p2: vec4<f32>, p3: vec4<f32>, fallback: vec3<f32>) -> vec3<f32> {
+    let c23 = cross(p2.xyz, p3.xyz);
+    let det = dot(p1.xyz, c23);
+    if abs(det) < 1e-6 {
+        return fallback;
+    }
+    return (p1.w * c23 + p2.w * cross(p3.xyz, p1.xyz) + p3.w * cross(p1.xyz, p2.xyz)) / det;
+}
+
+// The one vertex of `others` whose plane with edge (a, b) has all six hull points on
+// one side; NONE if there is none or more than one (then the paper reverts to prisms).
+fn tight_vertex(pts: array<vec3<f32>, 6>, a: u32, b: u32, first_other: u32, eps: f32) -> u32 {
+    var found = NONE;
+    var count = 0u;
+    for (var k = first_other; k < first_other + 3u; k++) {
+        let m0 = cross(pts[b] - pts[a], pts[k] - pts[a]);
+        let len = length(m0);
+        if len < 1e-12 {
+            continue;
+        }
+        let m = m0 / len;
+        var pos = false;
+        var neg = false;
+        for (var j = 0u; j < 6u; j++) {
+            let s = plane_side(pts[j], pts[a], m);
+            pos = pos || s > eps;
+            neg = neg || s < -eps;
+        }
+        if !(pos && neg) {
+            found = k;
+            count += 1u;
+        }
+    }
+    return select(NONE, found, count == 1u);
+}
+
+struct Hull {
+    pts: array<vec3<f32>, 6>,
+    tri: array<vec3<u32>, 8>,
+    tight: bool,
+}
+
+fn orient_outward(h: ptr<function, Hull>) {
+    var c = vec3<f32>(0.0);
+    for (var i = 0u; i < 6u; i++) {
+        c += (*h).pts[i];
+    }
+    c /= 6.0;
+    for (var t = 0u; t < 8u; t++) {
+        let tr = (*h).tri[t];
+        let nrm = cross((*h).pts[tr.y] - (*h).pts[tr.x], (*h).pts[tr.z] - (*h).pts[tr.x]);
+        if dot(nrm, (*h).pts[tr.x] - c) < 0.0 {
+            (*h).tri[t] = vec3<u32>(tr.x, tr.z, tr.y);
+        }
+    }
+}
+
+fn build_hull(v: array<vec3<f32>, 3>, top: array<vec3<f32>, 3>, n: vec3<f32>, y_max: f32) -> Hull {
+    var h: Hull;
+    let size = max(max(distance(v[0], v[1]), distance(v[1], v[2])), distance(v[2], v[0]))
+        + max(max(distance(top[0], top[1]), distance(top[1], top[2])), distance(top[2], top[0]));
+    let eps = 1e-4 * max(size, y_max);
+    h.pts[0] = v[0];
+    h.pts[1] = v[1];
+    h.pts[2] = v[2];
+    h.pts[3] = top[0];
+    h.pts[4] = top[1];
+    h.pts[5] = top[2];
+    h.tri[0] = vec3<u32>(0u, 1u, 2u);
+    h.tri[1] = vec3<u32>(3u, 4u, 5u);
+    h.tight = false;
+    if u.tight_hulls == 1u {
+        // Sect. 4.3: one triangle per base edge (with a top vertex) and per top edge
+        // (with a base vertex): the convex hull of the two triangles when each choice
+        // is unique.
+        var ok = true;
+        for (var e = 0u; e < 3u; e++) {
+            let a = e;
+            let b = (e + 1u) % 3u;
+            let k_top = tight_vertex(h.pts, a, b, 3u, eps);
+            let k_base = tight_vertex(h.pts, a + 3u, b + 3u, 0u, eps);
+            ok = ok && k_top != NONE && k_base != NONE;
+            h.tri[2u + e] = vec3<u32>(a, b, select(3u, k_top, k_top != NONE));
+            h.tri[5u + e] = vec3<u32>(a + 3u, b + 3u, select(0u, k_base, k_base != NONE));
+        }
+        h.tight = ok;
+    }
+    if !h.tight {
+        // Ernst et al.'s bounding prism: three touching planes through the base edges,
+        // cut by the base plane and the plane parallel to it at y_max.
+        var planes: array<vec4<f32>, 3>;
+        for (var e = 0u; e < 3u; e++) {
+            planes[e] = prism_plane(v[e], v[(e + 1u) % 3u], v[(e + 2u) % 3u], top, n, eps);
+        }
+        let cap = vec4<f32>(n, dot(n, v[0]) + y_max);
+        for (var i = 0u; i < 3u; i++) {
+            // Vertex i lies on the planes of edges (i-1, i) and (i, i+1).
+            h.pts[3u + i] = three_planes(planes[(i + 2u) % 3u], planes[i], cap, top[i]);
+        }
+        for (var e = 0u; e < 3u; e++) {
+            let a = e;
+            let b = (e + 1u) % 3u;
+            h.tri[2u + 2u * e] = vec3<u32>(a, b, b + 3u);
+            h.tri[3u + 2u * e] = vec3<u32>(a, b + 3u, a + 3u);
+        }
+    }
+    orient_outward(&h);
+    return h;
+}
+
+fn pack_tris(h: Hull) -> vec4<u32> {
+    var words = vec4<u32>(0u, 0u, 0u, select(0u, 1u, h.tight));
+    for (var t = 0u; t < 8u; t++) {
+        for (var c = 0u; c < 3u; c++) {
+            let i = t * 3u + c;
+            words[i / 8u] |= h.tri[t][c] << (4u * (i % 8u));
+        }
+    }
+    return words;
+}
+
+fn write_beam(slot: u32, c: Candidate, k: Corners, level: u32) {
+    let g = corners_geometry(k);
+    var b: Beam;
+    let ends = end_heights(k, g);
+    let y_max = max(max(ends.x, ends.y), ends.z);
+    let measure = source_measure(c.uv01.xy, c.uv01.zw, c.uv2_level.xy);
+    var v: array<vec3<f32>, 3>;
+    var top: array<vec3<f32>, 3>;
+    for (var i = 0u; i < 3u; i++) {
+        v[i] = k.p[i].origin;
+        top[i] = v[i] + y_max * g.d[i];
+        b.v[i] = vec4<f32>(v[i], g.a[i]);
+        b.d[i] = vec4<f32>(g.d[i], ends[i]);
+        b.flux[i] = vec4<f32>(k.p[i].weight * measure, 0.0);
+    }
+    b.n = vec4<f32>(g.n, y_max);
+    let h = build_hull(v, top, g.n, y_max);
+    for (var i = 0u; i < 6u; i++) {
+        b.hull[i] = vec4<f32>(h.pts[i], 1.0);
+    }
+    b.tris = pack_tris(h);
+    beams[slot] = b;
+    atomicAdd(&control[select(C_PRISM, C_TIGHT, h.tight)], 1u);
+    atomicAdd(&control[C_BEAMS_PER_LEVEL + min(level, MAX_LEVELS)], 1u);
+}
+
+@compute @workgroup_size(64)
+fn emit(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x >= atomicLoad(&control[C_COUNT]) {
+        return;
+    }
+    let a = actions[id.x];
+    let off = offsets[id.x];
+    let c = load_candidate(id.x);
+    let level = u32(c.uv2_level.z);
+    if a == ACTION_SPLIT {
+        if off.x + 4u > u.max_beams {
+            return;
+        }
+        // Midpoint subdivision in uv: the children are traced afresh at the next
+        // level (the projected grid, not an interpolation of the parent).
+        let p0 = c.uv01.xy;
+        let p1 = c.uv01.zw;
+        let p2 = c.uv2_level.xy;
+        let m01 = 0.5 * (p0 + p1);
+        let m12 = 0.5 * (p1 + p2);
+        let m20 = 0.5 * (p2 + p0);
+        let l = f32(level + 1u);
+        var t: Candidate;
+        t.uv01 = vec4<f32>(p0, m01); t.uv2_level = vec4<f32>(m20, l, 0.0); store_child(off.x, t);
+        t.uv01 = vec4<f32>(m01, p1); t.uv2_level = vec4<f32>(m12, l, 0.0); store_child(off.x + 1u, t);
+        t.uv01 = vec4<f32>(m20, m12); t.uv2_level = vec4<f32>(p2, l, 0.0); store_child(off.x + 2u, t);
+        t.uv01 = vec4<f32>(m01, m12); t.uv2_level = vec4<f32>(m20, l, 0.0); store_child(off.x + 3u, t);
+        return;
+    }
+    var slot = atomicLoad(&control[C_BEAM_BASE]) + off.y;
+    for (var family = 0u; family < 2u; family++) {
+        if (a & (1u << family)) == 0u {
+            continue;
+        }
+        if slot < u.max_beams {
+            write_beam(slot, c, trace_corners(c, family), level);
+        }
+        slot += 1u;
+    }
+}
+
+// Moves to the next level's list.
+@compute @workgroup_size(1)
+fn advance() {
+    let next = atomicLoad(&control[C_NEXT_COUNT]);
+    atomicStore(&control[C_COUNT], next);
+    atomicAdd(&control[C_LEVEL], 1u);
+    set_dispatch(next);
+}
+
+// Indirect draw of every beam's hull: 8 triangles, 24 vertices per beam.
+@compute @workgroup_size(1)
+fn finalize() {
+    indirect_args[4] = 24u * atomicLoad(&control[C_BEAM_TOTAL]);
+    indirect_args[5] = 1u;
+    indirect_args[6] = 0u;
+    indirect_args[7] = 0u;
+}

@@ -1,0 +1,262 @@
+// Light paths of grid vertices (Liktor & Dachsbacher 2011, Sect. 4.1 and 6): the
+// first hit comes from the light G-buffer, two-sided refraction and further specular
+// bounces from distance impostors (Szirmay-Kalos et al. 2005). Composed into
+// generate.wgsl after types.wgsl and the impostor functions.
+
+@group(1) @binding(0) var<uniform> u: BeamUniforms;
+@group(1) @binding(1) var light_position: texture_2d<f32>;
+@group(1) @binding(2) var light_normal: texture_2d<f32>;
+@group(1) @binding(3) var light_ids: texture_2d<u32>;
+// The impostor atlas: specular slot k in layers 6k..6k+6, the diffuse receivers
+// (around the generators' centre) after the last slot.
+@group(1) @binding(4) var impostor_map: texture_2d_array<f32>;
+@group(1) @binding(5) var impostor_ids: texture_2d_array<u32>;
+
+const MAX_SPECULAR_EVENTS: u32 = 4u;
+const FAMILY_MAIN: u32 = 0u;
+const FAMILY_REFLECTED: u32 = 1u;
+
+struct Ray {
+    origin: vec3<f32>,
+    dir: vec3<f32>,
+}
+
+// The light ray through light-view uv (origin on the near plane).
+fn light_ray(uv: vec2<f32>) -> Ray {
+    let ndc = vec2<f32>(2.0 * uv.x - 1.0, 1.0 - 2.0 * uv.y);
+    let a = u.light_inv_view_proj * vec4<f32>(ndc, 0.0, 1.0);
+    let b = u.light_inv_view_proj * vec4<f32>(ndc, 1.0, 1.0);
+    var r: Ray;
+    r.origin = a.xyz / a.w;
+    r.dir = normalize(b.xyz / b.w - r.origin);
+    return r;
+}
+
+struct LightHit {
+    hit: bool,
+    position: vec3<f32>,
+    normal: vec3<f32>,
+    object: u32,
+}
+
+// The light G-buffer at uv: bilinear where the four texels hold the same object,
+// else the nearest texel; the position is then moved onto the light ray through uv
+// (the tangent plane of the sampled surface), so a vertex's flux and its ray agree.
+fn light_gbuffer_at(uv: vec2<f32>, ray: Ray) -> LightHit {
+    var h: LightHit;
+    h.hit = false;
+    let res = vec2<f32>(textureDimensions(light_position));
+    let st = uv * res - 0.5;
+    let base = floor(st);
+    let f = st - base;
+    let hi = vec2<i32>(res) - 1;
+    let p00 = clamp(vec2<i32>(base), vec2<i32>(0), hi);
+    let p11 = clamp(vec2<i32>(base) + 1, vec2<i32>(0), hi);
+    let p10 = vec2<i32>(p11.x, p00.y);
+    let p01 = vec2<i32>(p00.x, p11.y);
+    let i00 = textureLoad(light_ids, p00, 0).x;
+    let i10 = textureLoad(light_ids, p10, 0).x;
+    let i01 = textureLoad(light_ids, p01, 0).x;
+    let i11 = textureLoad(light_ids, p11, 0).x;
+    var q: vec4<f32>;
+    var n: vec3<f32>;
+    if i00 == i10 && i00 == i01 && i00 == i11 {
+        if i00 == NONE {
+            return h;
+        }
+        q = mix(mix(textureLoad(light_position, p00, 0), textureLoad(light_position, p10, 0), f.x),
+                mix(textureLoad(light_position, p01, 0), textureLoad(light_position, p11, 0), f.x), f.y);
+        n = mix(mix(textureLoad(light_normal, p00, 0).xyz, textureLoad(light_normal, p10, 0).xyz, f.x),
+                mix(textureLoad(light_normal, p01, 0).xyz, textureLoad(light_normal, p11, 0).xyz, f.x), f.y);
+        h.object = i00;
+    } else {
+        let pn = clamp(vec2<i32>(floor(uv * res)), vec2<i32>(0), hi);
+        h.object = textureLoad(light_ids, pn, 0).x;
+        if h.object == NONE {
+            return h;
+        }
+        q = textureLoad(light_position, pn, 0);
+        n = textureLoad(light_normal, pn, 0).xyz;
+    }
+    if q.w < 0.5 {
+        return h;
+    }
+    n = normalize(n);
+    let dn = dot(ray.dir, n);
+    var t = dot(q.xyz - ray.origin, ray.dir);
+    if abs(dn) > 1e-3 {
+        t = dot(q.xyz - ray.origin, n) / dn;
+    }
+    h.hit = true;
+    h.position = ray.origin + t * ray.dir;
+    h.normal = n;
+    return h;
+}
+
+fn specular_slot_of(object: u32) -> u32 {
+    for (var k = 0u; k < u.specular_count; k++) {
+        if u.specular[k].object == object {
+            return k;
+        }
+    }
+    return NONE;
+}
+
+// One call site per query: WGSL inlines every call, and the search loop is large.
+fn trace_slot(k: u32, o: vec3<f32>, d: vec3<f32>, t_max: f32) -> ImpostorHit {
+    let s = u.specular[k];
+    return impostor_trace_at(impostor_map, i32(6u * k), s.center_reach.xyz, o, d, 1e-4, t_max,
+                             u.impostor_tolerance * s.center_reach.w);
+}
+
+fn receiver_layer() -> i32 {
+    return i32(6u * u.specular_count);
+}
+
+fn extinction(length_m: f32) -> vec3<f32> {
+    if u.sigma_t.w < 0.5 {
+        return vec3<f32>(1.0);
+    }
+    return exp(-u.sigma_t.xyz * length_m);
+}
+
+// Where a vertex's light leaves its last specular surface.
+struct PathEnd {
+    valid: bool,
+    // Start of the beam edge (on the last specular surface) and its unit direction.
+    origin: vec3<f32>,
+    dir: vec3<f32>,
+    // Flux weight: irradiance (directional) or intensity (positional) times every
+    // Fresnel factor, reflectance and extinction along the way.
+    weight: vec3<f32>,
+    // Hash of the objects met (a silhouette of any of them changes it).
+    signature: u32,
+    first_object: u32,
+    first_normal: vec3<f32>,
+    // Distance from the light ray's origin to the first hit (m).
+    first_depth: f32,
+    first_point: vec3<f32>,
+    light_dir: vec3<f32>,
+    // Distance along `dir` to the receiver it lands on (m), and that receiver.
+    t_end: f32,
+    end_object: u32,
+}
+
+fn mix_signature(s: u32, object: u32, event: u32) -> u32 {
+    return (s ^ (object * 4u + event + 1u)) * 0x9E3779B1u;
+}
+
+// Traces the light path of light-view uv. FAMILY_MAIN refracts at dielectrics
+// (through closed ones: exit via the impostor; total internal reflection ends the
+// path, as in the paper's Fig. 4) and reflects at mirrors; FAMILY_REFLECTED takes
+// the Fresnel reflection at the first (dielectric) surface.
+fn trace_path(uv: vec2<f32>, family: u32) -> PathEnd {
+    var e: PathEnd;
+    e.valid = false;
+    let ray = light_ray(uv);
+    let g = light_gbuffer_at(uv, ray);
+    if !g.hit {
+        return e;
+    }
+    var slot = specular_slot_of(g.object);
+    if slot == NONE {
+        return e;
+    }
+    e.first_object = g.object;
+    e.first_normal = g.normal;
+    e.first_depth = dot(g.position - ray.origin, ray.dir);
+    e.first_point = g.position;
+    e.light_dir = ray.dir;
+    var w: vec3<f32>;
+    if u.light_dir_kind.w < 0.5 {
+        w = u.light_power.xyz * extinction(dot(g.position, ray.dir) - u.light_pos_start.w);
+    } else {
+        let light = lights[0];
+        w = light_intensity(light, ray.dir) * extinction(distance(g.position, u.light_pos_start.xyz));
+    }
+    var p = g.position;
+    var d = ray.dir;
+    var n = g.normal;
+    var sig = mix_signature(0u, g.object, 0u);
+    for (var event = 0u; event < MAX_SPECULAR_EVENTS; event++) {
+        let s = u.specular[slot];
+        let nf = select(n, -n, dot(d, n) > 0.0);
+        let cos_i = -dot(d, nf);
+        if s.kind == MAT_MIRROR {
+            d = reflect(d, nf);
+            w *= s.color.xyz;
+        } else {
+            let entering = dot(d, n) < 0.0;
+            let eta = select(s.ior, 1.0 / s.ior, entering);
+            let fresnel = fresnel_dielectric(cos_i, eta);
+            if family == FAMILY_REFLECTED && event == 0u {
+                d = reflect(d, nf);
+                w *= fresnel;
+            } else {
+                let t = refract(d, nf, eta);
+                if dot(t, t) < 0.5 {
+                    return e;
+                }
+                w *= 1.0 - fresnel;
+                d = normalize(t);
+                if s.closed == 1u && entering {
+                    // Two-sided refraction (Sect. 6): the exit point from the impostor.
+                    let h = trace_slot(slot, p, d, 2.0 * s.center_reach.w);
+                    if !h.found {
+                        return e;
+                    }
+                    w *= extinction(h.t);
+                    p = h.position;
+                    let n_out = h.normal;
+                    let cos_o = dot(d, n_out);
+                    let f_out = fresnel_dielectric(abs(cos_o), s.ior);
+                    let t2 = refract(d, select(n_out, -n_out, cos_o > 0.0), s.ior);
+                    if dot(t2, t2) < 0.5 {
+                        return e;
+                    }
+                    w *= 1.0 - f_out;
+                    d = normalize(t2);
+                    sig = mix_signature(sig, s.object, 1u);
+                }
+            }
+        }
+        // The receiver this edge would land on, then any specular object before it.
+        let r = impostor_trace_at(impostor_map, receiver_layer(), u.receivers.xyz, p, d, 1e-4,
+                                  2.0 * u.scene_reach, u.impostor_tolerance * u.receivers.w);
+        var t_receiver = u.scene_reach;
+        if r.found {
+            t_receiver = r.t;
+        }
+        var next = NONE;
+        var best: ImpostorHit;
+        best.t = t_receiver;
+        for (var k = 0u; k < u.specular_count; k++) {
+            // A surface is not met again right after leaving it (convex or open
+            // generators; the stated limit of impostor tracing).
+            if k == slot {
+                continue;
+            }
+            let h = trace_slot(k, p, d, t_receiver);
+            if h.found && h.t < best.t {
+                best = h;
+                next = k;
+            }
+        }
+        if next == NONE {
+            e.valid = true;
+            e.origin = p;
+            e.dir = d;
+            e.weight = w;
+            e.signature = sig;
+            e.t_end = t_receiver;
+            e.end_object = select(NONE, impostor_object_at(impostor_ids, receiver_layer(), r.position - u.receivers.xyz), r.found);
+            return e;
+        }
+        w *= extinction(best.t);
+        p = best.position;
+        n = best.normal;
+        slot = next;
+        sig = mix_signature(sig, u.specular[next].object, 2u);
+    }
+    return e;
+}

@@ -1,0 +1,363 @@
+//! The beam pipeline on the GPU against analytic answers, on whatever adapter the
+//! machine has (lavapipe on CI; without an adapter these fail with the install hint).
+//! Small images, grids and light G-buffers keep them fast.
+
+use beams::geometry::BeamSpace;
+use beams::{BeamConfig, BeamMethod, BeamRecord, HullKind};
+use caustics_gpu::readback::read_rgba32f;
+use caustics_gpu::{AdapterChoice, FrameMode, GpuContext, GpuScene, PassProfiler, Renderer};
+use caustics_method::CausticsMethod;
+use caustics_scene::{Scene, Vec3};
+
+fn config() -> BeamConfig {
+    BeamConfig {
+        grid: 8,
+        levels: 2,
+        hull: HullKind::Tight,
+        light_resolution: 256,
+        impostor_resolution: 64,
+        max_beams: 4096,
+        split_discontinuity: true,
+        split_normal_deg: 30.0,
+        split_depth_slope: 4.0,
+        split_hit_px: 1.0,
+        split_energy: true,
+        split_energy_threshold: 2.0,
+        split_camera: true,
+        split_camera_px: 16.0,
+        reflections: true,
+        surface_filter_px: 1.0,
+        soft_depth_m: 0.0,
+        max_focus: 1000.0,
+    }
+}
+
+struct Run {
+    ctx: GpuContext,
+    renderer: Renderer,
+    method: BeamMethod,
+}
+
+impl Run {
+    fn new(scene: serde_json::Value, config: &BeamConfig) -> Self {
+        let tmp = tempfile::tempdir().expect("tempdir");
+        let path = tmp.path().join("scene.json");
+        std::fs::write(&path, scene.to_string()).expect("write scene");
+        let scene = Scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
+        let ctx = GpuContext::new(&AdapterChoice::from_flag_or_env(None))
+            .unwrap_or_else(|e| panic!("{e}"));
+        let gpu_scene = GpuScene::upload(&ctx, scene.into(), Default::default()).expect("upload");
+        let renderer = Renderer::new(&ctx, gpu_scene, Default::default()).expect("renderer");
+        let method = BeamMethod::new(&ctx, &renderer, config, "adaptive-beams")
+            .unwrap_or_else(|e| panic!("{e}"));
+        Self {
+            ctx,
+            renderer,
+            method,
+        }
+    }
+
+    fn frame(&mut self) {
+        let mut profiler = PassProfiler::new(&self.ctx, 1);
+        let mut frame = self
+            .renderer
+            .begin_frame(&mut profiler, FrameMode::Timed)
+            .expect("frame");
+        self.method.record(&mut frame).expect("record");
+        frame.submit(&self.ctx).expect("submit");
+    }
+
+    fn counter(&self, name: &str) -> u64 {
+        let c = self.method.counters(&self.ctx).expect("counters");
+        *c.get(name).unwrap_or_else(|| panic!("no counter {name}"))
+    }
+
+    fn image(&self, which: &str) -> Vec<f32> {
+        let t = self.renderer.targets();
+        let target = if which == "surface" {
+            &t.surface
+        } else {
+            &t.volume
+        };
+        read_rgba32f(&self.ctx, &target.texture, which).expect("read image")
+    }
+
+    fn positions(&self) -> Vec<f32> {
+        read_rgba32f(
+            &self.ctx,
+            &self.renderer.camera_gbuffer().position.texture,
+            "positions",
+        )
+        .expect("read positions")
+    }
+}
+
+fn builtin(name: &str, width: u32, height: u32) -> serde_json::Value {
+    let src = caustics_scene::resolve(name).expect("built-in scene");
+    let mut json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(src).expect("read")).expect("JSON");
+    json["camera"]["width"] = width.into();
+    json["camera"]["height"] = height.into();
+    json
+}
+
+/// A 2×2 m glass slab surface (one interface, n = 1.5) 1 m above a floor, lit
+/// straight down, optionally in a medium, seen from `eye`.
+fn flat_refractor(eye: [f64; 3], target: [f64; 3], quad: f64, medium: bool) -> serde_json::Value {
+    let mut scene = serde_json::json!({
+        "name": "flat_refractor",
+        "camera": {"eye": eye, "target": target, "up": [0, 1, 0], "fov_y_deg": 40,
+                   "width": 64, "height": 48},
+        "lights": [{"type": "directional", "direction": [0, -1, 0], "irradiance": [1, 1, 1]}],
+        "materials": {
+            "glass": {"type": "dielectric", "ior": 1.5},
+            "floor": {"type": "diffuse", "albedo": [0.8, 0.8, 0.8]}
+        },
+        "objects": [
+            {"shape": {"type": "quad", "center": [0, 2, 0], "normal": [0, 1, 0], "size": [quad, quad]},
+             "material": "glass"},
+            {"shape": {"type": "quad", "center": [0, 0, 0], "normal": [0, 1, 0], "size": [10, 10]},
+             "material": "floor"}
+        ]
+    });
+    if medium {
+        scene["medium"] =
+            serde_json::json!({"sigma_s": [0.1, 0.1, 0.1], "sigma_a": [0, 0, 0], "g": 0});
+    }
+    scene
+}
+
+/// Fresnel reflectance at normal incidence for n = 1.5.
+const F0: f32 = 0.04;
+
+#[test]
+fn refinement_is_deterministic() {
+    let scene = builtin("sphere_on_plane", 64, 48);
+    let mut a = Run::new(scene.clone(), &config());
+    let mut b = Run::new(scene, &config());
+    a.frame();
+    a.frame();
+    b.frame();
+    let (ba, bb) = (
+        a.method.read_beams(&a.ctx).expect("beams"),
+        b.method.read_beams(&b.ctx).expect("beams"),
+    );
+    assert!(ba.len() > 100, "only {} beams", ba.len());
+    assert_eq!(
+        bytemuck::cast_slice::<BeamRecord, u8>(&ba),
+        bytemuck::cast_slice::<BeamRecord, u8>(&bb),
+        "the same scene refined twice gave different beams"
+    );
+    assert!(
+        a.counter("beams_level_1") + a.counter("beams_level_2") > 0,
+        "nothing refined"
+    );
+    assert_eq!(
+        a.method.counters(&a.ctx).expect("counters"),
+        b.method.counters(&b.ctx).expect("counters")
+    );
+    // Two frames accumulate nothing: the image is the same frame after frame.
+    assert_eq!(a.image("surface"), b.image("surface"));
+}
+
+/// Sect. 4.2 with the discontinuity criterion off: a flat refractor under a
+/// directional light neither focuses nor spreads, so nothing splits, and the floor
+/// under it gets E·(1 − F0): radiance ρ/π·(1 − F0)·E.
+#[test]
+fn flat_refractor_does_not_split_and_gives_the_analytic_irradiance() {
+    let mut c = config();
+    c.levels = 3;
+    c.split_discontinuity = false;
+    // The low-pass filter would spread the column's edge over a few pixels.
+    c.surface_filter_px = 0.0;
+    let mut run = Run::new(
+        flat_refractor([0.0, 0.6, 4.0], [0.0, 0.0, 0.0], 2.0, false),
+        &c,
+    );
+    run.frame();
+    for k in ["splits_discontinuity", "splits_energy", "splits_camera"] {
+        assert_eq!(run.counter(k), 0, "{k}");
+    }
+    // 8×8 cells × 2 triangles, the main family only (the reflection goes up, to no
+    // receiver).
+    assert_eq!(run.counter("beams"), 128);
+    assert_eq!(run.counter("beams_level_0"), 128);
+    let expected = 0.8 / std::f32::consts::PI * (1.0 - F0);
+    let surface = run.image("surface");
+    let pos = run.positions();
+    let mut checked = 0;
+    for i in 0..surface.len() / 4 {
+        let p = Vec3::new(pos[4 * i], pos[4 * i + 1], pos[4 * i + 2]);
+        if pos[4 * i + 3] > 0.5 && p.y.abs() < 1e-3 && p.x.abs() < 0.85 && p.z.abs() < 0.85 {
+            let v = surface[4 * i];
+            assert!(
+                (v - expected).abs() < 0.01 * expected,
+                "floor at {p}: {v}, analytic {expected}"
+            );
+            checked += 1;
+        }
+        if pos[4 * i + 3] > 0.5 && p.y.abs() < 1e-3 && (p.x.abs() > 1.1 || p.z.abs() > 1.1) {
+            assert_eq!(
+                surface[4 * i],
+                0.0,
+                "caustic outside the slab's column at {p}"
+            );
+        }
+    }
+    assert!(checked > 100, "only {checked} floor pixels under the slab");
+}
+
+/// Sect. 5.2: the volume caustic of a vertical column of light (two beams under a
+/// 1×1 m slab) in a medium equals the single-scattering integral
+/// ∫ σs·p·E·exp(−σt(s1 + t)) dt along each camera ray, the paper's one-sample
+/// estimate being exact up to the curvature of the exponentials.
+#[test]
+fn volume_caustic_matches_the_analytic_inscattering_integral() {
+    let mut c = config();
+    c.grid = 1;
+    c.levels = 0;
+    // The 4% Fresnel reflection would add a column above the slab.
+    c.reflections = false;
+    let eye = Vec3::new(0.3, 1.0, 3.0);
+    let scene = flat_refractor([0.3, 1.0, 3.0], [0.0, 1.0, 0.0], 1.0, true);
+    let mut run = Run::new(scene.clone(), &c);
+    run.frame();
+    assert_eq!(run.counter("beams"), 2);
+    let volume = run.image("volume");
+    let pos = run.positions();
+    let cam = {
+        let tmp = tempfile::tempdir().expect("tempdir");
+        let path = tmp.path().join("s.json");
+        std::fs::write(&path, scene.to_string()).expect("write");
+        Scene::load(&path).expect("scene").camera
+    };
+    let (sigma_s, sigma_t) = (0.1f32, 0.1f32);
+    // The reference's (and the method's) directional photons start 1 m above the
+    // scene's top (y = 2): 1 m of medium before the slab.
+    let e_column = (1.0 - F0) * (-sigma_t * 1.0f32).exp();
+    let phase = 1.0 / (4.0 * std::f32::consts::PI);
+    let mut checked = 0;
+    for py in 0..cam.height {
+        for px in 0..cam.width {
+            let i = (py * cam.width + px) as usize;
+            let (o, d) = cam.ray_through_pixel(px as f32 + 0.5, py as f32 + 0.5);
+            assert!((o - eye).length() < 1e-4);
+            let t_surface = if pos[4 * i + 3] > 0.5 {
+                (Vec3::new(pos[4 * i], pos[4 * i + 1], pos[4 * i + 2]) - o).length()
+            } else {
+                f32::INFINITY
+            };
+            // Chord of the ray through the column |x|, |z| <= 0.5, 0 <= y <= 2.
+            let (mut t0, mut t1) = (0.0f32, t_surface);
+            for (oc, dc, lo, hi) in [
+                (o.x, d.x, -0.5, 0.5),
+                (o.z, d.z, -0.5, 0.5),
+                (o.y, d.y, 0.0, 2.0),
+            ] {
+                let (a, b) = ((lo - oc) / dc, (hi - oc) / dc);
+                t0 = t0.max(a.min(b));
+                t1 = t1.min(a.max(b));
+            }
+            if t1 - t0 < 0.3 {
+                continue;
+            }
+            let steps = 2000;
+            let dt = (t1 - t0) / steps as f32;
+            let mut analytic = 0.0f32;
+            for k in 0..steps {
+                let t = t0 + (k as f32 + 0.5) * dt;
+                let s1 = 2.0 - (o.y + t * d.y);
+                analytic += sigma_s * phase * e_column * (-sigma_t * (s1 + t)).exp() * dt;
+            }
+            let v = volume[4 * i];
+            assert!(
+                (v - analytic).abs() < 0.01 * analytic,
+                "pixel ({px}, {py}): volume {v}, analytic {analytic}"
+            );
+            checked += 1;
+        }
+    }
+    assert!(checked > 100, "only {checked} pixels see the column");
+}
+
+fn hull_planes(b: &BeamRecord) -> Vec<(Vec3, Vec3)> {
+    let pts: Vec<Vec3> = b.hull.iter().map(|p| Vec3::new(p[0], p[1], p[2])).collect();
+    (0..8)
+        .map(|t| {
+            let idx = |c: usize| {
+                let i = t * 3 + c;
+                ((b.tris[i / 8] >> (4 * (i % 8))) & 15) as usize
+            };
+            let (a, bb, c) = (pts[idx(0)], pts[idx(1)], pts[idx(2)]);
+            (a, (bb - a).cross(c - a))
+        })
+        .collect()
+}
+
+/// Every beam's stored A(y) is the area of its cross-section (Sect. 4.3), and its
+/// hull (tight or prism) contains the beam: every edge up to where it meets the
+/// receiver lies inside all eight outward-facing hull triangles.
+#[test]
+fn beams_have_their_geometric_area_function_and_a_hull_that_contains_them() {
+    let mut run = Run::new(builtin("sphere_on_plane", 64, 48), &config());
+    run.frame();
+    let beams = run.method.read_beams(&run.ctx).expect("beams");
+    assert!(!beams.is_empty());
+    let (mut tight, mut prism) = (0, 0);
+    for (k, b) in beams.iter().enumerate() {
+        let v = [0, 1, 2].map(|i| Vec3::new(b.v[i][0], b.v[i][1], b.v[i][2]));
+        let d = [0, 1, 2].map(|i| Vec3::new(b.d[i][0], b.d[i][1], b.d[i][2]));
+        let space = BeamSpace::new(v, d).expect("stored beams are valid");
+        let y_max = b.n[3];
+        for y in [0.0, 0.5 * y_max, y_max] {
+            let stored = b.v[0][3] + y * (b.v[1][3] + y * b.v[2][3]);
+            let measured = space.measured_area(y);
+            assert!(
+                (stored - measured).abs() <= 1e-3 * (space.a[0].abs() + measured.abs()),
+                "beam {k}: A({y}) = {stored}, cross-section {measured}"
+            );
+        }
+        let planes = hull_planes(b);
+        let size = (v[1] - v[0]).length() + y_max;
+        for i in 0..3 {
+            for s in 0..=8 {
+                let p = v[i] + d[i] * (b.d[i][3] * s as f32 / 8.0);
+                for (a, n) in &planes {
+                    let outside = (p - *a).dot(n.normalize());
+                    assert!(
+                        outside <= 1e-3 * size,
+                        "beam {k} ({}): edge {i} point {p} is {outside} m outside its hull",
+                        if b.tris[3] == 1 { "tight" } else { "prism" }
+                    );
+                }
+            }
+        }
+        if b.tris[3] == 1 {
+            tight += 1;
+        } else {
+            prism += 1;
+        }
+    }
+    assert!(tight > 0, "no tight hull built ({prism} prisms)");
+}
+
+#[test]
+fn overflow_is_counted_when_the_buffers_are_too_small() {
+    let mut c = config();
+    c.grid = 4;
+    c.levels = 3;
+    c.max_beams = 40;
+    let mut run = Run::new(builtin("sphere_on_plane", 64, 48), &c);
+    run.frame();
+    let overflow = run.counter("overflow_candidates") + run.counter("overflow_beams");
+    assert!(overflow > 0, "a 40-slot buffer held every beam");
+    assert!(run.counter("beams") <= 40);
+    // With room, nothing overflows.
+    c.max_beams = 4096;
+    let mut roomy = Run::new(builtin("sphere_on_plane", 64, 48), &c);
+    roomy.frame();
+    assert_eq!(
+        roomy.counter("overflow_candidates") + roomy.counter("overflow_beams"),
+        0
+    );
+}

@@ -1,0 +1,201 @@
+// Photon tracing pass (Umenhoffer, Patow, Szirmay-Kalos §4.1): one invocation per
+// texel of the light's view of the caustic generator. The light G-buffer gives the
+// first surface the light meets; where that is the generator, the light ray is
+// reflected (mirror) or refracted (dielectric, exact Fresnel), leaves a closed
+// refractor through the exit point found in the generator's own distance map (§3:
+// linear then secant search), and lands on the diffuse receiver found in the distance
+// map of the receivers around the generator's centre (the paper's layered distance
+// map of the environment). The texel's flux is the light's power through the texel
+// times the Fresnel transmittances or the mirror's reflectance (§4.1).
+
+struct TraceUniform {
+    // Faces of the light view (1 or 6).
+    layers: u32,
+    // Texels per side of a face.
+    resolution: u32,
+    // The caustic generator (object index).
+    generator: u32,
+    // Bit 0: closed refractor (two interfaces); bit 1: orthographic light view.
+    flags: u32,
+    // xyz: the receivers' distance map centre (= the caustic map centre); w: its reach (m).
+    center: vec4<f32>,
+    // xyz: the generator's distance map centre; w: its reach (m).
+    generator_center: vec4<f32>,
+    // x: texel size (m for orthographic, tan units per texel for perspective);
+    // y: tan of the half field of view (perspective); z unused;
+    // w: search tolerance relative to a map's reach.
+    view: vec4<f32>,
+}
+
+const FLAG_CLOSED: u32 = 1u;
+const FLAG_ORTHOGRAPHIC: u32 = 2u;
+
+@group(1) @binding(0) var<uniform> tu: TraceUniform;
+@group(1) @binding(1) var light_position: texture_2d_array<f32>;
+@group(1) @binding(2) var light_normal: texture_2d_array<f32>;
+@group(1) @binding(3) var light_ids: texture_2d_array<u32>;
+@group(1) @binding(4) var generator_map: texture_2d_array<f32>;
+@group(1) @binding(5) var generator_ids: texture_2d_array<u32>;
+@group(1) @binding(6) var receiver_map: texture_2d_array<f32>;
+@group(1) @binding(7) var receiver_ids: texture_2d_array<u32>;
+@group(1) @binding(8) var<storage, read_write> hits: array<PhotonHit>;
+// One counter per HIT_* reason.
+@group(1) @binding(9) var<storage, read_write> trace_counters: array<atomic<u32>>;
+
+// Refracts unit `d` at a surface with outward normal `n_out` of a dielectric of index
+// `ior` (outside 1.0). xyz: new direction; w: Fresnel transmittance, or -1 under total
+// internal reflection.
+fn refract_through(d: vec3<f32>, n_out: vec3<f32>, ior: f32) -> vec4<f32> {
+    let entering = dot(d, n_out) < 0.0;
+    let n = select(-n_out, n_out, entering);
+    let eta = select(ior, 1.0 / ior, entering);
+    let f = fresnel_dielectric(-dot(d, n), eta);
+    let t = refract(d, n, eta);
+    if f >= 1.0 || dot(t, t) < 0.5 {
+        return vec4<f32>(0.0, 0.0, 0.0, -1.0);
+    }
+    return vec4<f32>(normalize(t), 1.0 - f);
+}
+
+// The receiver along o + t·d: the distance-map search over ranges that grow fourfold
+// (reach/64, /16, /4, 1, 2 × the reach). `impostor_trace` marches even steps over its
+// range; over the whole reach at once, a receiver a few centimetres from the start
+// falls inside the first step, and is missed when that step begins where the map
+// stores no surface (a ray leaving the ring's wall above the map's centre, whose
+// direction from the centre sees no receiver yet). Ranges that grow with the distance
+// travelled keep the steps proportional to it.
+fn trace_receiver(o: vec3<f32>, d: vec3<f32>) -> ImpostorHit {
+    let c = tu.center.xyz;
+    let reach = tu.center.w;
+    let tolerance = tu.view.w * reach;
+    var t0 = 1e-4 * reach;
+    var t1 = reach / 64.0;
+    var hit: ImpostorHit;
+    hit.found = false;
+    for (var k = 0u; k < 5u; k++) {
+        hit = impostor_trace(receiver_map, c, o, d, t0, t1, tolerance);
+        if hit.found {
+            return hit;
+        }
+        t0 = t1;
+        t1 = min(4.0 * t1, 2.0 * reach);
+    }
+    return hit;
+}
+
+fn store_invalid(i: u32, why: u32) {
+    var h: PhotonHit;
+    h.ids = vec4<u32>(NONE, 0u, why, 0u);
+    hits[i] = h;
+    atomicAdd(&trace_counters[why], 1u);
+}
+
+@compute @workgroup_size(64)
+fn trace_photons(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let per_face = tu.resolution * tu.resolution;
+    let i = gid.x;
+    if i >= per_face * tu.layers {
+        return;
+    }
+    let layer = i32(i / per_face);
+    let k = i % per_face;
+    let texel = vec2<i32>(i32(k % tu.resolution), i32(k / tu.resolution));
+    let pos = textureLoad(light_position, texel, layer, 0);
+    let obj_id = textureLoad(light_ids, texel, layer, 0).x;
+    if pos.w < 0.5 || obj_id != tu.generator {
+        // The light meets nothing, or a diffuse object first: no caustic path here.
+        store_invalid(i, HIT_NOT_GENERATOR);
+        return;
+    }
+    let light = lights[0];
+    let p0 = pos.xyz;
+    // Direction of the texel's light and the power through the texel (§4.1: "the power
+    // going through a pixel of the light's camera"): irradiance × texel area for a
+    // directional light, intensity × texel solid angle for a point/spot light, where a
+    // texel at tan-plane coordinates (x, y) subtends s² / (1 + x² + y²)^(3/2).
+    var d: vec3<f32>;
+    var flux: vec3<f32>;
+    var footprint: f32;
+    let ts = tu.view.x;
+    if (tu.flags & FLAG_ORTHOGRAPHIC) != 0u {
+        d = light.direction.xyz;
+        footprint = ts * ts;
+        flux = light.power.xyz * footprint;
+    } else {
+        let to = p0 - light.position.xyz;
+        let dist = length(to);
+        d = to / dist;
+        let xy = ((vec2<f32>(texel) + 0.5) * 2.0 / f32(tu.resolution) - 1.0) * tu.view.y;
+        let omega = ts * ts / pow(1.0 + dot(xy, xy), 1.5);
+        flux = light_intensity(light, d) * omega;
+        footprint = omega * dist * dist;
+    }
+    let mat = materials[objects[tu.generator].material];
+    let n_g = normalize(textureLoad(light_normal, texel, layer, 0).xyz);
+    // Path id: the generator and the side of its surface the light met (the ring's
+    // inner and outer walls make two sheets that must not be joined by triangles).
+    let path = tu.generator * 2u + select(0u, 1u, dot(d, n_g) > 0.0);
+    var p = p0;
+    let gen_center = tu.generator_center.xyz;
+    if mat.kind == MAT_MIRROR {
+        // DESIGN: mirrors reflect with their reflectance at every angle, on both sides.
+        flux *= mat.color.xyz;
+        d = reflect(d, n_g);
+        // A second meeting with the generator (a ray crossing the ring to its other
+        // wall) is a second specular event, which this method does not follow. The
+        // search starts 5 % of the map's reach away so the reflection point itself
+        // (tessellated vs stored surface) is not taken for a crossing.
+        let reach = tu.generator_center.w;
+        let again = impostor_trace(generator_map, gen_center, p, d, 0.05 * reach, 2.0 * reach, tu.view.w * reach);
+        if again.found {
+            store_invalid(i, HIT_SECOND_BOUNCE);
+            return;
+        }
+    } else {
+        let r1 = refract_through(d, n_g, mat.ior);
+        if r1.w < 0.0 {
+            store_invalid(i, HIT_TIR);
+            return;
+        }
+        flux *= r1.w;
+        d = r1.xyz;
+        if (tu.flags & FLAG_CLOSED) != 0u {
+            // Exit point from the refractor's own distance map (§3). The search starts
+            // 5 % of the reach inside: chords through a sphere of index 1.5 are at
+            // least 1.49 R long, and the entry point must not count as the exit.
+            let reach = tu.generator_center.w;
+            let exit = impostor_trace(generator_map, gen_center, p, d, 0.05 * reach, 2.0 * reach, tu.view.w * reach);
+            if !exit.found {
+                store_invalid(i, HIT_NO_EXIT);
+                return;
+            }
+            p = exit.position;
+            let r2 = refract_through(d, exit.normal, mat.ior);
+            if r2.w < 0.0 {
+                store_invalid(i, HIT_TIR);
+                return;
+            }
+            flux *= r2.w;
+            d = r2.xyz;
+        }
+    }
+    // The receiver: the distance map of the diffuse objects around the centre.
+    let c = tu.center.xyz;
+    let hit = trace_receiver(p, d);
+    if !hit.found {
+        store_invalid(i, HIT_NO_RECEIVER);
+        return;
+    }
+    let receiver = impostor_object(receiver_ids, hit.position - c);
+    if receiver == NONE || materials[objects[receiver].material].kind != MAT_DIFFUSE {
+        store_invalid(i, HIT_SPECULAR_RECEIVER);
+        return;
+    }
+    var h: PhotonHit;
+    h.position = vec4<f32>(hit.position, length(hit.position - c));
+    h.normal = vec4<f32>(select(hit.normal, -hit.normal, dot(hit.normal, d) > 0.0), footprint);
+    h.flux = vec4<f32>(flux, 0.0);
+    h.ids = vec4<u32>(receiver, path, HIT_VALID, 0u);
+    hits[i] = h;
+    atomicAdd(&trace_counters[HIT_VALID], 1u);
+}
