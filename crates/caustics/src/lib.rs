@@ -1,12 +1,21 @@
 //! The caustics-bench harness (the `caustics` binary's library): the method registry,
 //! `caustics run` (render, measure, score, write results) and the result schema.
 //! The harness owns timing, fill counting and scoring so every method is measured
-//! the same way (DESIGN "The method contract").
+//! the same way (DESIGN "The method contract"). Experiments as data
+//! (`bench/experiments/*.json`, [`experiment`]), `caustics reproduce` and `merge`
+//! ([`reproduce`], [`summary`], [`plots`]) and the regression gate `caustics compare`
+//! ([`compare`]) and the static HTML report ([`report`]) build on `run`.
 
+pub mod compare;
+pub mod experiment;
 pub mod machine;
+pub mod plots;
 pub mod reference_cmd;
 pub mod references;
 pub mod registry;
+pub mod report;
+pub mod reproduce;
 pub mod result;
 pub mod run;
 pub mod stats;
+pub mod summary;

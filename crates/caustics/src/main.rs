@@ -3,7 +3,10 @@
 use std::process::ExitCode;
 
 use anyhow::Result;
+use caustics::compare::CompareArgs;
 use caustics::reference_cmd::ReferenceArgs;
+use caustics::report::ReportArgs;
+use caustics::reproduce::{MergeArgs, ReproduceArgs};
 use caustics::run::{EXIT_SKIPPED, RunOptions, RunOutcome};
 use caustics::{registry, run};
 use clap::{Parser, Subcommand};
@@ -28,7 +31,19 @@ enum Command {
     /// Render the CPU reference of a scene (surface and volume caustics with standard
     /// errors) into the reference cache that `run` scores against.
     Reference(ReferenceArgs),
+    /// Run an experiment of bench/experiments (or `all`): every (scene, method,
+    /// parameter set) it names, then a summary (tables, plots, Bencher Metric Format).
+    Reproduce(ReproduceArgs),
+    /// Merge the output folders of `reproduce --shard k/n` into one.
+    Merge(MergeArgs),
+    /// Compare two result folders run by run; exit 2 on a regression.
+    Compare(CompareArgs),
+    /// Write a static HTML report (index.html + images) of reproduced experiments.
+    Report(ReportArgs),
 }
+
+/// Exit code of `compare` when it finds a regression (1 is an error).
+const EXIT_REGRESSION: u8 = 2;
 
 fn list() {
     println!("scenes ({}):", caustics_scene::builtin_dir().display());
@@ -61,6 +76,30 @@ fn main() -> ExitCode {
         Command::Reference(args) => {
             caustics::reference_cmd::reference(&args).map(|()| ExitCode::SUCCESS)
         }
+        Command::Reproduce(args) => caustics::reproduce::reproduce(&args).map(|o| {
+            if o.failed > 0 {
+                eprintln!("{} runs failed (see the summaries)", o.failed);
+                ExitCode::FAILURE
+            } else {
+                ExitCode::SUCCESS
+            }
+        }),
+        Command::Merge(args) => caustics::reproduce::merge(&args).map(|dir| {
+            println!("merged into {}", dir.display());
+            ExitCode::SUCCESS
+        }),
+        Command::Compare(args) => caustics::compare::compare(&args).map(|r| {
+            print!("{}", r.table(args.verbose));
+            if r.regressions() > 0 {
+                ExitCode::from(EXIT_REGRESSION)
+            } else {
+                ExitCode::SUCCESS
+            }
+        }),
+        Command::Report(args) => caustics::report::report(&args).map(|index| {
+            println!("report: {}", index.display());
+            ExitCode::SUCCESS
+        }),
         Command::Run(opts) => run::run(&opts).map(|o| match o {
             RunOutcome::Done { dir, result } => {
                 print_summary(&dir, &result);

@@ -135,7 +135,7 @@ pub fn reference(args: &ReferenceArgs) -> Result<()> {
         (None, None) => bail!("give --photons N or --time SECONDS"),
     };
     bar.finish_and_clear();
-    write(&dir, &scene, args, &result)?;
+    write(&dir, &scene, args.seed, args.batches, &result)?;
     let rel = relative_stderr(&result.caustic, &result.caustic_stderr);
     println!(
         "{}: {} photons in {:.1} s ({:.2} M photons/s), mean relative standard error {:.2}% -> {}",
@@ -149,10 +149,37 @@ pub fn reference(args: &ReferenceArgs) -> Result<()> {
     Ok(())
 }
 
+/// Renders the reference of `scene` (as loaded: its camera's resolution is the image's)
+/// with a fixed photon budget into `dir`, `meta.json` last; `tick` gets photons done.
+/// Returns the mean relative standard error over caustic pixels.
+pub fn render_into(
+    dir: &std::path::Path,
+    scene: &Scene,
+    photons: u64,
+    seed: u64,
+    batches: u32,
+    tick: &(dyn Fn(u64) + Sync),
+) -> Result<f64> {
+    if photons == 0 || batches < 2 {
+        bail!("a reference needs photons > 0 and at least 2 batches");
+    }
+    let tracer = Reference::new(scene)?;
+    let opts = ReferenceOptions {
+        photons,
+        batches,
+        seed,
+        direct: false,
+    };
+    let result = tracer.render(&opts, tick)?;
+    write(dir, scene, seed, batches, &result)?;
+    Ok(relative_stderr(&result.caustic, &result.caustic_stderr))
+}
+
 fn write(
     dir: &std::path::Path,
     scene: &Scene,
-    args: &ReferenceArgs,
+    seed: u64,
+    batches: u32,
     r: &ReferenceResult,
 ) -> Result<()> {
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
@@ -178,8 +205,8 @@ fn write(
         photons: r.photons,
         seconds: r.seconds,
         photons_per_second: r.photons as f64 / r.seconds.max(1e-9),
-        seed: args.seed,
-        batches: args.batches,
+        seed,
+        batches,
         commit: crate::machine::build().commit,
         relative_stderr: relative_stderr(&r.caustic, &r.caustic_stderr),
     };

@@ -125,6 +125,13 @@ pub fn run(o: &RunOptions) -> Result<RunOutcome> {
     validate_options(o)?;
     let scene_path = caustics_scene::resolve(&o.scene)?;
     let scene = Scene::load(&scene_path)?;
+    run_scene(o, scene)
+}
+
+/// [`run`] on a scene already loaded (and possibly changed, e.g. its camera's
+/// resolution by `caustics reproduce`); `o.scene` is not read.
+pub fn run_scene(o: &RunOptions, scene: Scene) -> Result<RunOutcome> {
+    validate_options(o)?;
     let info = registry::find(&o.method)?;
     let params = parse_param_flags(&o.params)?;
     (info.validate_params)(&params)?;

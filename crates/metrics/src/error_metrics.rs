@@ -142,6 +142,15 @@ pub struct Errors {
     pub best_scale: f64,
     /// The second value of [`best_scale`], W·m⁻²·sr⁻¹.
     pub rmse_after_best_scale: f64,
+    /// [`rel_mse`] of the test image times `best_scale`: what is left of relMSE once
+    /// the overall brightness is fixed (a shape error, not a normalization error).
+    /// Absent in result files written before it existed.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rel_mse_after_best_scale: Option<f64>,
+    /// Mean [`flip`](crate::flip) of the test image times `best_scale`, tone-mapped the
+    /// same way. Absent in result files written before it existed.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub flip_after_best_scale: Option<f64>,
 }
 
 /// Computes every metric of [`Errors`]: RMSE, relMSE and the best scale on the linear
@@ -155,6 +164,7 @@ pub fn all_errors(
     check_pair(test, reference)?;
     let (best_scale, rmse_after_best_scale) = best_scale(test, reference)?;
     let (display_test, display_reference) = (tone.display(test), tone.display(reference));
+    let rescaled = test.scaled(best_scale as f32);
     Ok(Errors {
         rmse: rmse(test, reference)?,
         rel_mse: rel_mse(test, reference, REL_MSE_EPS)?,
@@ -163,6 +173,8 @@ pub fn all_errors(
         flip: crate::flip(test, reference, tone)?,
         best_scale,
         rmse_after_best_scale,
+        rel_mse_after_best_scale: Some(rel_mse(&rescaled, reference, REL_MSE_EPS)?),
+        flip_after_best_scale: Some(crate::flip(&rescaled, reference, tone)?),
     })
 }
 

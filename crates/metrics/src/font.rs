@@ -8,7 +8,7 @@ use crate::Rgb8Image;
 /// Glyph width in pixels.
 pub(crate) const GLYPH_W: u32 = 5;
 /// Glyph height in pixels.
-pub(crate) const GLYPH_H: u32 = 7;
+pub const GLYPH_H: u32 = 7;
 /// Horizontal advance per character (glyph plus one pixel of spacing).
 pub(crate) const ADVANCE: u32 = GLYPH_W + 1;
 
@@ -82,13 +82,13 @@ fn ink(c: char, gx: u32, gy: u32) -> bool {
 }
 
 /// Width in pixels of `text` drawn horizontally (no trailing spacing).
-pub(crate) fn text_width(text: &str) -> u32 {
+pub fn text_width(text: &str) -> u32 {
     let n = text.chars().count() as u32;
     (n * ADVANCE).saturating_sub(1)
 }
 
 /// Draws `text` left to right with its top-left corner at `(x, y)`; clipped to the image.
-pub(crate) fn draw_text(img: &mut Rgb8Image, x: u32, y: u32, text: &str, colour: [u8; 3]) {
+pub fn draw_text(img: &mut Rgb8Image, x: u32, y: u32, text: &str, colour: [u8; 3]) {
     for (i, c) in text.chars().enumerate() {
         let x0 = x + i as u32 * ADVANCE;
         for gy in 0..GLYPH_H {
@@ -104,13 +104,7 @@ pub(crate) fn draw_text(img: &mut Rgb8Image, x: u32, y: u32, text: &str, colour:
 /// Draws `text` rotated 90° counter-clockwise (reading bottom to top, like a plot's y-axis
 /// label) in the column `x .. x + GLYPH_H`, starting at the bottom row `y_bottom`.
 /// Characters that would run above row 0 are dropped.
-pub(crate) fn draw_text_vertical(
-    img: &mut Rgb8Image,
-    x: u32,
-    y_bottom: u32,
-    text: &str,
-    colour: [u8; 3],
-) {
+pub fn draw_text_vertical(img: &mut Rgb8Image, x: u32, y_bottom: u32, text: &str, colour: [u8; 3]) {
     for (i, c) in text.chars().enumerate() {
         let offset = i as u32 * ADVANCE + GLYPH_W - 1;
         let Some(top) = y_bottom.checked_sub(offset) else {

@@ -39,6 +39,7 @@ pub use crate::error_metrics::{
     Errors, REL_MSE_EPS, all_errors, best_scale, check_pair, psnr, rel_mse, rmse,
 };
 pub use crate::flip::{FLIP_PIXELS_PER_DEGREE, flip, flip_map};
+pub use crate::font::{GLYPH_H, draw_text, draw_text_vertical, text_width};
 pub use crate::heatmap::{
     COLOR_BAR_WIDTH, HeatmapOptions, Histogram, HistogramBucket, MIN_MAP_HEIGHT, PANEL_BACKGROUND,
     ZERO_COUNT_COLOUR, error_map, error_map_with_max, error_quantile, format_count, format_value,

@@ -10,6 +10,11 @@
 //! cargo run --release -p pinhole --example fig4 [-- SCENE.json [SAMPLES,...]]
 //! ```
 //!
+//! The same runs as data are the `wand-fig4` experiment (`caustics reproduce wand-fig4`,
+//! with the paper's timings beside ours, plots, Bencher output, shards, `compare`); this
+//! example stays for what only it draws: the strategies × samples grid composite and the
+//! least-squares fit of gather time against sample-pixel pairs.
+//!
 //! The scene is `ring` at a reduced resolution (the reference must be cached for the
 //! same file, or the error columns stay empty); the default is 128×96 so that the
 //! sweep finishes in minutes on a software adapter.

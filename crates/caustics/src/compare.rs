@@ -1,0 +1,513 @@
+//! `caustics compare BASE NEW`: a regression gate over two result folders, run by run.
+//!
+//! Runs are matched by the path of their `result.json` relative to the folder (so two
+//! `reproduce` outputs, two `caustics run --out` folders or a baseline and a new run all
+//! compare). For each pair:
+//!
+//! - **inputs**: scene content hash, resolution, method and parameters must be equal,
+//!   else the pair is not comparable (a regression: the baseline no longer says anything);
+//! - **deterministic figures** (fragment-shader invocations and primitives per pass, the
+//!   fill counts, the method's counters): equal, or within `--count-tolerance` (relative);
+//! - **errors** against the reference (RMSE, RMSE after the best scale, relMSE, FLIP):
+//!   worse when `new − base > max(--error-tolerance · base, --noise-k · σ_ref)`, σ_ref the
+//!   larger of the two references' noise RMS (for RMSE-like figures): a change inside the
+//!   reference's own noise means nothing;
+//! - **timings** (method and frame GPU ms): slower when the two-sided Mann-Whitney U test
+//!   over the per-frame samples gives p < `--alpha` *and* the median grew by more than
+//!   `--time-threshold`; files without per-frame samples fall back to "new p10 above base
+//!   p90 and median grew by more than the threshold". Timings on different adapters are
+//!   shown, never gated; `--no-timings` shows them without gating (CI on shared CPUs).
+//!
+//! A run of BASE missing from NEW is a regression; a run only in NEW is listed as new.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, bail};
+
+use crate::result::RunResult;
+use crate::stats::{Summary, mann_whitney};
+
+/// Flags of `caustics compare`.
+#[derive(Clone, Debug, clap::Args)]
+pub struct CompareArgs {
+    /// Baseline folder.
+    pub base: PathBuf,
+    /// New folder.
+    pub new: PathBuf,
+    /// Minimum relative growth of a median GPU time that counts as slower (0.05 = 5%).
+    #[arg(long, default_value_t = 0.05)]
+    pub time_threshold: f64,
+    /// Significance level of the Mann-Whitney test on per-frame GPU times.
+    #[arg(long, default_value_t = 0.01)]
+    pub alpha: f64,
+    /// Relative tolerance of deterministic counts (0 = exact).
+    #[arg(long, default_value_t = 0.0)]
+    pub count_tolerance: f64,
+    /// Relative growth of an error that counts as worse.
+    #[arg(long, default_value_t = 0.02)]
+    pub error_tolerance: f64,
+    /// Growth of RMSE-like errors below this many reference-noise RMS is not a change.
+    #[arg(long, default_value_t = 0.5)]
+    pub noise_k: f64,
+    /// Show timings without gating them (CI on shared or software adapters).
+    #[arg(long)]
+    pub no_timings: bool,
+    /// Print every comparison, not only the changed ones.
+    #[arg(long, short)]
+    pub verbose: bool,
+}
+
+/// What a comparison found.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Verdict {
+    /// Equal, or a change inside the noise/tolerance.
+    Same,
+    /// Better (faster, smaller error).
+    Better,
+    /// Changed, reported but not gated (timings with --no-timings or across adapters).
+    Info,
+    /// Only in NEW.
+    New,
+    /// A regression: slower, worse, a changed count, missing, not comparable.
+    Regression,
+}
+
+impl Verdict {
+    fn word(&self) -> &'static str {
+        match self {
+            Verdict::Same => "same",
+            Verdict::Better => "better",
+            Verdict::Info => "changed (not gated)",
+            Verdict::New => "new",
+            Verdict::Regression => "REGRESSION",
+        }
+    }
+}
+
+/// One comparison.
+#[derive(Clone, Debug)]
+pub struct Line {
+    /// Run (relative folder).
+    pub run: String,
+    /// What was compared.
+    pub measure: String,
+    /// Baseline value, formatted.
+    pub base: String,
+    /// New value, formatted.
+    pub new: String,
+    /// Change and test, formatted.
+    pub change: String,
+    /// The verdict.
+    pub verdict: Verdict,
+}
+
+/// The result of a comparison.
+#[derive(Clone, Debug, Default)]
+pub struct Report {
+    /// Every comparison made.
+    pub lines: Vec<Line>,
+    /// Runs compared.
+    pub runs: usize,
+}
+
+impl Report {
+    /// Number of regressions.
+    pub fn regressions(&self) -> usize {
+        self.lines
+            .iter()
+            .filter(|l| l.verdict == Verdict::Regression)
+            .count()
+    }
+
+    /// The table (changed lines only unless `all`), then a one-line verdict.
+    pub fn table(&self, all: bool) -> String {
+        let rows: Vec<&Line> = self
+            .lines
+            .iter()
+            .filter(|l| all || l.verdict != Verdict::Same)
+            .collect();
+        let mut out = String::new();
+        if !rows.is_empty() {
+            let w = |f: fn(&Line) -> &str, h: &str| {
+                rows.iter()
+                    .map(|l| f(l).len())
+                    .max()
+                    .unwrap_or(0)
+                    .max(h.len())
+            };
+            let (a, b, c, d, e) = (
+                w(|l| &l.run, "run"),
+                w(|l| &l.measure, "measure"),
+                w(|l| &l.base, "base"),
+                w(|l| &l.new, "new"),
+                w(|l| &l.change, "change"),
+            );
+            out += &format!(
+                "{:a$}  {:b$}  {:>c$}  {:>d$}  {:e$}  verdict\n",
+                "run", "measure", "base", "new", "change"
+            );
+            for l in rows {
+                out += &format!(
+                    "{:a$}  {:b$}  {:>c$}  {:>d$}  {:e$}  {}\n",
+                    l.run,
+                    l.measure,
+                    l.base,
+                    l.new,
+                    l.change,
+                    l.verdict.word()
+                );
+            }
+        }
+        let count = |v: Verdict| self.lines.iter().filter(|l| l.verdict == v).count();
+        out += &format!(
+            "{} runs compared: {} regressions, {} better, {} changed but not gated, {} new, {} unchanged\n",
+            self.runs,
+            count(Verdict::Regression),
+            count(Verdict::Better),
+            count(Verdict::Info),
+            count(Verdict::New),
+            count(Verdict::Same)
+        );
+        out
+    }
+}
+
+/// Every `result.json` under `root`, by its folder relative to `root`. In a
+/// `reproduce` output folder (one with a `manifest.json`) only the runs its manifest
+/// lists as done count, so stale runs of an earlier reproduction into the same folder
+/// are not compared.
+pub fn collect_results(root: &Path) -> Result<BTreeMap<String, RunResult>> {
+    if !root.is_dir() {
+        bail!("{}: no such folder", root.display());
+    }
+    if root.join("manifest.json").is_file() {
+        let m = crate::reproduce::read_manifest(root)?;
+        let mut out = BTreeMap::new();
+        for rel in m.runs.iter().filter_map(|r| r.dir.as_ref()) {
+            out.insert(rel.clone(), crate::summary::read_result(&root.join(rel))?);
+        }
+        if out.is_empty() {
+            bail!(
+                "{}: its manifest lists no run that was done",
+                root.display()
+            );
+        }
+        return Ok(out);
+    }
+    let mut out = BTreeMap::new();
+    let mut stack = vec![root.to_path_buf()];
+    while let Some(dir) = stack.pop() {
+        for entry in
+            std::fs::read_dir(&dir).with_context(|| format!("reading {}", dir.display()))?
+        {
+            let path = entry?.path();
+            if path.is_dir() {
+                stack.push(path);
+            } else if path.file_name().is_some_and(|n| n == "result.json") {
+                let text = std::fs::read_to_string(&path)
+                    .with_context(|| format!("reading {}", path.display()))?;
+                let r: RunResult = serde_json::from_str(&text)
+                    .with_context(|| format!("{}: not a result.json", path.display()))?;
+                let rel = path
+                    .parent()
+                    .and_then(|p| p.strip_prefix(root).ok())
+                    .map(|p| p.display().to_string())
+                    .unwrap_or_default();
+                out.insert(if rel.is_empty() { ".".into() } else { rel }, r);
+            }
+        }
+    }
+    if out.is_empty() {
+        bail!(
+            "{}: holds no result.json (expected a `caustics reproduce` or `caustics run` output folder)",
+            root.display()
+        );
+    }
+    Ok(out)
+}
+
+/// Compares two folders.
+pub fn compare(args: &CompareArgs) -> Result<Report> {
+    for (v, name, ok) in [
+        (
+            args.time_threshold,
+            "--time-threshold",
+            args.time_threshold >= 0.0,
+        ),
+        (args.alpha, "--alpha", args.alpha > 0.0 && args.alpha < 1.0),
+        (
+            args.count_tolerance,
+            "--count-tolerance",
+            args.count_tolerance >= 0.0,
+        ),
+        (
+            args.error_tolerance,
+            "--error-tolerance",
+            args.error_tolerance >= 0.0,
+        ),
+        (args.noise_k, "--noise-k", args.noise_k >= 0.0),
+    ] {
+        if !(v.is_finite() && ok) {
+            bail!("{name}: expected a non-negative number (alpha: in (0, 1)), got {v}");
+        }
+    }
+    let base = collect_results(&args.base).context("BASE")?;
+    let new = collect_results(&args.new).context("NEW")?;
+    let mut report = Report::default();
+    for (key, b) in &base {
+        let Some(n) = new.get(key) else {
+            report.lines.push(line(
+                key,
+                "run",
+                "present",
+                "missing",
+                "",
+                Verdict::Regression,
+            ));
+            continue;
+        };
+        report.runs += 1;
+        compare_run(key, b, n, args, &mut report.lines);
+    }
+    for key in new.keys().filter(|k| !base.contains_key(*k)) {
+        report.lines.push(line(
+            key,
+            "run",
+            "–",
+            "present",
+            "not in BASE",
+            Verdict::New,
+        ));
+    }
+    Ok(report)
+}
+
+fn line(run: &str, measure: &str, base: &str, new: &str, change: &str, verdict: Verdict) -> Line {
+    Line {
+        run: run.into(),
+        measure: measure.into(),
+        base: base.into(),
+        new: new.into(),
+        change: change.into(),
+        verdict,
+    }
+}
+
+fn compare_run(key: &str, b: &RunResult, n: &RunResult, args: &CompareArgs, out: &mut Vec<Line>) {
+    let inputs = |r: &RunResult| {
+        format!(
+            "{} {} {}x{} {} {}",
+            r.scene.name,
+            r.scene.hash,
+            r.scene.width,
+            r.scene.height,
+            r.method.name,
+            r.method.params
+        )
+    };
+    if inputs(b) != inputs(n) {
+        out.push(line(
+            key,
+            "inputs",
+            &inputs(b),
+            &inputs(n),
+            "scene, size, method or parameters differ",
+            Verdict::Regression,
+        ));
+        return;
+    }
+    // Deterministic counts.
+    let counts = |r: &RunResult| -> BTreeMap<String, u64> {
+        let mut m = BTreeMap::new();
+        if let Some(f) = &r.fragments {
+            m.insert("fragments (method)".into(), f.method_total);
+            m.insert("fill total".into(), f.fill_total);
+            m.insert("fill max".into(), f.fill_max as u64);
+            m.insert("fill covered pixels".into(), f.fill_covered_pixels);
+            for p in &f.passes {
+                m.insert(
+                    format!("{} fragments", p.name),
+                    p.fragment_shader_invocations,
+                );
+                m.insert(format!("{} primitives", p.name), p.primitives);
+                if p.compute_shader_invocations > 0 {
+                    m.insert(format!("{} compute", p.name), p.compute_shader_invocations);
+                }
+            }
+        }
+        for (k, v) in &r.counters {
+            m.insert(format!("counter {k}"), *v);
+        }
+        m
+    };
+    let (cb, cn) = (counts(b), counts(n));
+    let keys: std::collections::BTreeSet<&String> = cb.keys().chain(cn.keys()).collect();
+    for k in keys {
+        match (cb.get(k), cn.get(k)) {
+            (Some(&x), Some(&y)) => {
+                let rel = (y as f64 - x as f64).abs() / (x as f64).max(1.0);
+                let verdict = if x == y || rel <= args.count_tolerance {
+                    Verdict::Same
+                } else {
+                    Verdict::Regression
+                };
+                let change = if x == y {
+                    String::new()
+                } else {
+                    format!(
+                        "{:+} ({:+.2}%)",
+                        y as i128 - x as i128,
+                        100.0 * (y as f64 - x as f64) / (x as f64).max(1.0)
+                    )
+                };
+                out.push(line(
+                    key,
+                    k,
+                    &x.to_string(),
+                    &y.to_string(),
+                    &change,
+                    verdict,
+                ));
+            }
+            (x, y) => out.push(line(
+                key,
+                k,
+                &x.map(|v| v.to_string()).unwrap_or("absent".into()),
+                &y.map(|v| v.to_string()).unwrap_or("absent".into()),
+                "present in one run only",
+                Verdict::Regression,
+            )),
+        }
+    }
+    compare_errors(key, b, n, args, out);
+    let adapters_differ = b.machine.adapter != n.machine.adapter;
+    let timing = |r: &RunResult, which: &str| -> Option<Summary> {
+        match which {
+            "method GPU ms" => r.timing.method_gpu_ms.clone(),
+            _ => r.timing.frame_gpu_ms.clone(),
+        }
+    };
+    for which in ["method GPU ms", "frame GPU ms"] {
+        if let (Some(x), Some(y)) = (timing(b, which), timing(n, which)) {
+            let mut l = compare_timing(key, which, &x, &y, args);
+            if l.verdict != Verdict::Same && (args.no_timings || adapters_differ) {
+                l.change += if adapters_differ {
+                    " [different adapters]"
+                } else {
+                    " [--no-timings]"
+                };
+                l.verdict = Verdict::Info;
+            }
+            out.push(l);
+        }
+    }
+}
+
+fn compare_errors(
+    key: &str,
+    b: &RunResult,
+    n: &RunResult,
+    args: &CompareArgs,
+    out: &mut Vec<Line>,
+) {
+    let (eb, en) = match (&b.errors, &n.errors) {
+        (None, None) => return,
+        (Some(_), None) => {
+            out.push(line(
+                key,
+                "errors",
+                "present",
+                "absent",
+                "no reference in NEW",
+                Verdict::Regression,
+            ));
+            return;
+        }
+        (None, Some(_)) => {
+            out.push(line(key, "errors", "absent", "present", "", Verdict::Info));
+            return;
+        }
+        (Some(x), Some(y)) => (x, y),
+    };
+    let noise = eb
+        .reference_noise_rms
+        .unwrap_or(0.0)
+        .max(en.reference_noise_rms.unwrap_or(0.0));
+    let figures: [(&str, f64, f64, bool); 4] = [
+        ("RMSE", eb.surface.rmse, en.surface.rmse, true),
+        (
+            "RMSE after best scale",
+            eb.surface.rmse_after_best_scale,
+            en.surface.rmse_after_best_scale,
+            true,
+        ),
+        ("relMSE", eb.surface.rel_mse, en.surface.rel_mse, false),
+        ("FLIP", eb.surface.flip, en.surface.flip, false),
+    ];
+    for (name, x, y, rmse_like) in figures {
+        let allowed = (args.error_tolerance * x.abs()).max(if rmse_like {
+            args.noise_k * noise
+        } else {
+            0.0
+        });
+        let verdict = if (!y.is_finite() && x.is_finite()) || y - x > allowed {
+            Verdict::Regression
+        } else if x - y > allowed {
+            Verdict::Better
+        } else {
+            Verdict::Same
+        };
+        let change = if x == y {
+            String::new()
+        } else {
+            format!(
+                "{:+.2}% (allowed ±{})",
+                100.0 * (y - x) / x.abs().max(1e-300),
+                crate::summary::num(allowed)
+            )
+        };
+        out.push(line(
+            key,
+            &format!("error {name}"),
+            &crate::summary::num(x),
+            &crate::summary::num(y),
+            &change,
+            verdict,
+        ));
+    }
+}
+
+/// Compares two timing summaries (see the module docs).
+pub fn compare_timing(key: &str, name: &str, b: &Summary, n: &Summary, args: &CompareArgs) -> Line {
+    let ratio = n.median / b.median.max(1e-12);
+    let grew = ratio > 1.0 + args.time_threshold;
+    let shrank = ratio < 1.0 / (1.0 + args.time_threshold);
+    let (verdict, test) = if !b.values.is_empty() && !n.values.is_empty() {
+        let t = mann_whitney(&b.values, &n.values);
+        let significant = t.p_value < args.alpha;
+        let v = match (significant, grew, shrank) {
+            (true, true, _) if t.prob_b_greater > 0.5 => Verdict::Regression,
+            (true, _, true) if t.prob_b_greater < 0.5 => Verdict::Better,
+            _ => Verdict::Same,
+        };
+        (v, format!("Mann-Whitney p={:.2e}", t.p_value))
+    } else {
+        let v = if grew && n.p10 > b.p90 {
+            Verdict::Regression
+        } else if shrank && n.p90 < b.p10 {
+            Verdict::Better
+        } else {
+            Verdict::Same
+        };
+        (v, "p10/p90 ranges (no per-frame samples)".to_owned())
+    };
+    line(
+        key,
+        name,
+        &format!("{:.3}", b.median),
+        &format!("{:.3}", n.median),
+        &format!("{:+.1}%, {test}", 100.0 * (ratio - 1.0)),
+        verdict,
+    )
+}

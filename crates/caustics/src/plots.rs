@@ -1,0 +1,571 @@
+//! Plots of a summary, drawn with `plotters` on its bitmap backend (no system fonts:
+//! plotters is built without a text feature and every label is drawn with the metrics
+//! crate's embedded 5×7 font), written as PNG:
+//!
+//! - `error_vs_time_<scene>.png`: RMSE against the method's GPU time, one colour per
+//!   method, with the Pareto front (runs no other run beats in both);
+//! - `fragments.png`: fragment-shader invocations of the method's passes per run.
+
+use std::path::Path;
+
+use anyhow::{Result, anyhow};
+use caustics_metrics::{Rgb8Image, draw_text, draw_text_vertical, text_width};
+use plotters::prelude::*;
+
+use crate::summary::{Row, Summary, num};
+
+const PALETTE: [[u8; 3]; 8] = [
+    [31, 119, 180],
+    [255, 127, 14],
+    [44, 160, 44],
+    [214, 39, 40],
+    [148, 103, 189],
+    [140, 86, 75],
+    [227, 119, 194],
+    [127, 127, 127],
+];
+const INK: [u8; 3] = [20, 20, 20];
+const GRID: [u8; 3] = [225, 225, 225];
+
+/// An axis: value range, linear or log10.
+#[derive(Clone, Copy, Debug)]
+struct Axis {
+    lo: f64,
+    hi: f64,
+    log: bool,
+}
+
+impl Axis {
+    /// Fits values (all finite; positive ones only on a log axis), padded by 5%.
+    fn fit(values: &[f64]) -> Axis {
+        let (mut lo, mut hi) = values
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+                (a.min(v), b.max(v))
+            });
+        let log = lo > 0.0 && hi / lo > 20.0;
+        if log {
+            let (l, h) = (lo.log10(), hi.log10());
+            let pad = 0.05 * (h - l);
+            return Axis {
+                lo: 10f64.powf(l - pad),
+                hi: 10f64.powf(h + pad),
+                log,
+            };
+        }
+        if hi - lo <= f64::EPSILON * hi.abs().max(1.0) {
+            let d = if hi == 0.0 { 1.0 } else { 0.1 * hi.abs() };
+            lo -= d;
+            hi += d;
+        }
+        let pad = 0.05 * (hi - lo);
+        Axis {
+            lo: if lo >= 0.0 {
+                (lo - pad).max(0.0)
+            } else {
+                lo - pad
+            },
+            hi: hi + pad,
+            log,
+        }
+    }
+    fn map(&self, v: f64) -> f64 {
+        if self.log { v.log10() } else { v }
+    }
+    fn range(&self) -> std::ops::Range<f64> {
+        self.map(self.lo)..self.map(self.hi)
+    }
+    fn ticks(&self) -> Vec<f64> {
+        if self.log {
+            let mut t = Vec::new();
+            let (a, b) = (
+                self.lo.log10().floor() as i32,
+                self.hi.log10().ceil() as i32,
+            );
+            let per_decade: &[f64] = if b - a <= 2 { &[1.0, 2.0, 5.0] } else { &[1.0] };
+            for e in a..=b {
+                for m in per_decade {
+                    let v = m * 10f64.powi(e);
+                    if v >= self.lo && v <= self.hi {
+                        t.push(v);
+                    }
+                }
+            }
+            return t;
+        }
+        let raw = (self.hi - self.lo) / 5.0;
+        let mag = 10f64.powf(raw.log10().floor());
+        let step = [1.0, 2.0, 5.0, 10.0]
+            .iter()
+            .map(|m| m * mag)
+            .find(|s| *s >= raw)
+            .unwrap_or(10.0 * mag);
+        let mut v = (self.lo / step).ceil() * step;
+        let mut t = Vec::new();
+        while v <= self.hi + 1e-9 * step {
+            t.push(if v.abs() < 1e-12 * step { 0.0 } else { v });
+            v += step;
+        }
+        t
+    }
+}
+
+/// A tick value with at most 4 significant digits and no trailing zeros.
+fn tick_label(v: f64) -> String {
+    if v == 0.0 {
+        return "0".into();
+    }
+    if v.abs() >= 1e5 || v.abs() < 1e-3 {
+        return format!("{v:.1e}");
+    }
+    let decimals = (3 - v.abs().log10().floor() as i32).max(0) as usize;
+    let s = format!("{v:.decimals$}");
+    if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.').to_owned()
+    } else {
+        s
+    }
+}
+
+fn colour(c: [u8; 3]) -> RGBColor {
+    RGBColor(c[0], c[1], c[2])
+}
+
+fn plot_err<E: std::fmt::Debug>(e: E) -> anyhow::Error {
+    anyhow!("drawing a plot: {e:?}")
+}
+
+/// A named series: colour, points, and whether they are joined by a line.
+type Series = (String, [u8; 3], Vec<(f64, f64)>, bool);
+
+/// Text to draw after plotters is done: (x, y, text, vertical).
+type Labels = Vec<(i32, i32, String, bool)>;
+
+fn finish(buf: Vec<u8>, w: u32, h: u32, labels: &Labels, path: &Path) -> Result<()> {
+    let mut img = Rgb8Image {
+        width: w,
+        height: h,
+        pixels: buf.chunks_exact(3).map(|p| [p[0], p[1], p[2]]).collect(),
+    };
+    for (x, y, text, vertical) in labels {
+        let (x, y) = ((*x).max(0) as u32, (*y).max(0) as u32);
+        if *vertical {
+            draw_text_vertical(&mut img, x, y, text, INK);
+        } else {
+            draw_text(&mut img, x, y, text, INK);
+        }
+    }
+    caustics_metrics::write_png(path, &img)?;
+    Ok(())
+}
+
+/// A scatter plot with axes, ticks, labels, legend; `series` are (name, colour,
+/// points, connect-with-line).
+fn scatter(
+    path: &Path,
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+    series: &[Series],
+) -> Result<()> {
+    let (w, h) = (720u32, 420u32);
+    let all: Vec<(f64, f64)> = series.iter().flat_map(|s| s.2.clone()).collect();
+    let xa = Axis::fit(&all.iter().map(|p| p.0).collect::<Vec<_>>());
+    let ya = Axis::fit(&all.iter().map(|p| p.1).collect::<Vec<_>>());
+    let mut buf = vec![255u8; (w * h * 3) as usize];
+    let mut labels: Labels = Vec::new();
+    {
+        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
+        root.fill(&WHITE).map_err(plot_err)?;
+        let mut chart = ChartBuilder::on(&root)
+            .margin_top(28)
+            .margin_right(210)
+            .margin_left(70)
+            .margin_bottom(40)
+            .build_cartesian_2d(xa.range(), ya.range())
+            .map_err(plot_err)?;
+        let (xr, yr) = (xa.range(), ya.range());
+        for t in xa.ticks() {
+            let x = xa.map(t);
+            chart
+                .draw_series(LineSeries::new([(x, yr.start), (x, yr.end)], colour(GRID)))
+                .map_err(plot_err)?;
+            let (px, py) = chart.backend_coord(&(x, yr.start));
+            let s = tick_label(t);
+            labels.push((px - text_width(&s) as i32 / 2, py + 6, s, false));
+        }
+        for t in ya.ticks() {
+            let y = ya.map(t);
+            chart
+                .draw_series(LineSeries::new([(xr.start, y), (xr.end, y)], colour(GRID)))
+                .map_err(plot_err)?;
+            let (px, py) = chart.backend_coord(&(xr.start, y));
+            let s = tick_label(t);
+            labels.push((px - 6 - text_width(&s) as i32, py - 3, s, false));
+        }
+        let frame = [
+            (xr.start, yr.start),
+            (xr.end, yr.start),
+            (xr.end, yr.end),
+            (xr.start, yr.end),
+            (xr.start, yr.start),
+        ];
+        chart
+            .draw_series(LineSeries::new(frame, colour(INK)))
+            .map_err(plot_err)?;
+        for (i, (name, c, pts, line)) in series.iter().enumerate() {
+            let mapped: Vec<(f64, f64)> = pts.iter().map(|p| (xa.map(p.0), ya.map(p.1))).collect();
+            if *line {
+                chart
+                    .draw_series(LineSeries::new(mapped.clone(), colour(*c).stroke_width(1)))
+                    .map_err(plot_err)?;
+                chart
+                    .draw_series(
+                        mapped
+                            .iter()
+                            .map(|p| Circle::new(*p, 2, colour(*c).filled())),
+                    )
+                    .map_err(plot_err)?;
+            } else {
+                chart
+                    .draw_series(
+                        mapped
+                            .iter()
+                            .map(|p| Circle::new(*p, 4, colour(*c).filled())),
+                    )
+                    .map_err(plot_err)?;
+            }
+            // Legend entry in the right margin.
+            let (lx, ly) = (w as i32 - 200, 36 + 14 * i as i32);
+            root.draw(&Rectangle::new(
+                [(lx, ly), (lx + 10, ly + if *line { 2 } else { 8 })],
+                colour(*c).filled(),
+            ))
+            .map_err(plot_err)?;
+            labels.push((lx + 16, ly, name.clone(), false));
+        }
+        root.present().map_err(plot_err)?;
+    }
+    labels.push((70, 10, title.to_owned(), false));
+    let x_label = format!("{x_label}{}", if xa.log { " (log)" } else { "" });
+    labels.push((
+        70 + (w as i32 - 280) / 2 - text_width(&x_label) as i32 / 2,
+        h as i32 - 14,
+        x_label,
+        false,
+    ));
+    let y_label = format!("{y_label}{}", if ya.log { " (log)" } else { "" });
+    labels.push((
+        8,
+        h as i32 / 2 + text_width(&y_label) as i32 / 2,
+        y_label,
+        true,
+    ));
+    finish(buf, w, h, &labels, path)
+}
+
+/// The runs not beaten in both time and error by another run, sorted by time.
+pub fn pareto_front(points: &[(f64, f64)]) -> Vec<(f64, f64)> {
+    let mut p = points.to_vec();
+    p.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
+    let mut front: Vec<(f64, f64)> = Vec::new();
+    for q in p {
+        if front.last().is_none_or(|l| q.1 < l.1) {
+            front.push(q);
+        }
+    }
+    front
+}
+
+fn file_safe(s: &str) -> String {
+    s.chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
+}
+
+/// Horizontal bars of the method's fragments, one per run.
+fn fragments_plot(path: &Path, rows: &[(&Row, u64)], methods: &[String]) -> Result<()> {
+    let bar_h = 12i32;
+    let label_w = rows
+        .iter()
+        .map(|(r, _)| text_width(&bar_label(r)) as i32)
+        .max()
+        .unwrap_or(0)
+        + 16;
+    let (w, h) = (
+        (label_w + 420) as u32,
+        (40 + rows.len() as i32 * (bar_h + 4) + 20) as u32,
+    );
+    let max = rows.iter().map(|r| r.1).max().unwrap_or(1).max(1) as f64;
+    let mut buf = vec![255u8; (w * h * 3) as usize];
+    let mut labels: Labels = vec![(
+        8,
+        10,
+        "fragments shaded by the method passes (count frame)".into(),
+        false,
+    )];
+    {
+        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
+        root.fill(&WHITE).map_err(plot_err)?;
+        let span = 330.0;
+        for (i, (r, f)) in rows.iter().enumerate() {
+            let y = 32 + i as i32 * (bar_h + 4);
+            let m = methods.iter().position(|m| *m == r.method).unwrap_or(0);
+            let len = ((*f as f64 / max) * span).round() as i32;
+            root.draw(&Rectangle::new(
+                [(label_w, y), (label_w + len.max(1), y + bar_h)],
+                colour(PALETTE[m % PALETTE.len()]).filled(),
+            ))
+            .map_err(plot_err)?;
+            labels.push((8, y + 3, bar_label(r), false));
+            labels.push((label_w + len + 4, y + 3, num(*f as f64), false));
+        }
+        root.present().map_err(plot_err)?;
+    }
+    finish(buf, w, h, &labels, path)
+}
+
+/// Images in a grid (up to 4 a row), each under its label, on white.
+fn tile(path: &Path, title: &str, tiles: &[(String, Rgb8Image)]) -> Result<()> {
+    let cols = tiles.len().min(4);
+    let rows = tiles.len().div_ceil(cols);
+    let label_h = 12;
+    let cell_w = tiles
+        .iter()
+        .map(|t| t.1.width.max(text_width(&t.0)))
+        .max()
+        .unwrap_or(1)
+        + 8;
+    let cell_h = tiles.iter().map(|t| t.1.height).max().unwrap_or(1) + label_h + 8;
+    let mut img = Rgb8Image::filled(
+        cols as u32 * cell_w + 8,
+        rows as u32 * cell_h + 24,
+        [255; 3],
+    );
+    draw_text(&mut img, 8, 6, title, INK);
+    for (i, (label, t)) in tiles.iter().enumerate() {
+        let (x0, y0) = (
+            8 + (i % cols) as u32 * cell_w,
+            20 + (i / cols) as u32 * cell_h,
+        );
+        draw_text(&mut img, x0, y0, label, INK);
+        for y in 0..t.height {
+            for x in 0..t.width {
+                img.set(x0 + x, y0 + label_h + y, t.get(x, y));
+            }
+        }
+    }
+    caustics_metrics::write_png(path, &img)?;
+    Ok(())
+}
+
+fn bar_label(r: &Row) -> String {
+    let params: Vec<String> = r
+        .params
+        .iter()
+        .map(|(k, v)| match v {
+            serde_json::Value::String(s) => format!("{k}={s}"),
+            v => format!("{k}={v}"),
+        })
+        .collect();
+    format!("{} {} {}", r.scene, r.method, params.join(" "))
+}
+
+/// Writes the plots of `s` into `dir`; returns their paths relative to the summary.
+pub fn write_plots(dir: &Path, s: &Summary) -> Result<Vec<String>> {
+    let mut written = Vec::new();
+    let done: Vec<&Row> = s.runs.iter().filter(|r| r.status == "done").collect();
+    let mut methods: Vec<String> = Vec::new();
+    for r in &done {
+        if !methods.contains(&r.method) {
+            methods.push(r.method.clone());
+        }
+    }
+    let mut scenes: Vec<String> = Vec::new();
+    for r in &done {
+        if !scenes.contains(&r.scene) {
+            scenes.push(r.scene.clone());
+        }
+    }
+    let need = |written: &mut Vec<String>, name: String| -> Result<std::path::PathBuf> {
+        std::fs::create_dir_all(dir)?;
+        written.push(format!("plots/{name}"));
+        Ok(dir.join(name))
+    };
+    for scene in &scenes {
+        let mut series = Vec::new();
+        let mut all = Vec::new();
+        for (i, m) in methods.iter().enumerate() {
+            let pts: Vec<(f64, f64)> = done
+                .iter()
+                .filter(|r| &r.scene == scene && &r.method == m)
+                .filter_map(|r| Some((r.method_gpu_ms?.median, r.errors?.rmse)))
+                .filter(|p| p.0.is_finite() && p.1.is_finite() && p.0 > 0.0 && p.1 >= 0.0)
+                .collect();
+            if !pts.is_empty() {
+                all.extend(pts.iter().copied());
+                series.push((m.clone(), PALETTE[i % PALETTE.len()], pts, false));
+            }
+        }
+        if all.is_empty() {
+            continue;
+        }
+        series.push(("pareto front".into(), INK, pareto_front(&all), true));
+        let path = need(
+            &mut written,
+            format!("error_vs_time_{}.png", file_safe(scene)),
+        )?;
+        scatter(
+            &path,
+            &format!("{}: {scene}: error against cost", s.experiment),
+            "method GPU ms (median)",
+            "RMSE of the surface caustic",
+            &series,
+        )?;
+    }
+    // Error against each numeric parameter swept over 3+ values, one line per method and
+    // setting of the other parameters (e.g. RMSE against samples per sampling strategy).
+    for scene in &scenes {
+        let runs: Vec<&Row> = done
+            .iter()
+            .copied()
+            .filter(|r| &r.scene == scene && r.errors.is_some())
+            .collect();
+        let mut names: Vec<&String> = runs.iter().flat_map(|r| r.params.keys()).collect();
+        names.sort();
+        names.dedup();
+        for name in names {
+            let mut lines: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
+            for r in &runs {
+                let (Some(x), Some(e)) = (r.params.get(name).and_then(|v| v.as_f64()), r.errors)
+                else {
+                    continue;
+                };
+                let mut rest: Vec<String> = r
+                    .params
+                    .iter()
+                    .filter(|(k, _)| *k != name)
+                    .map(|(k, v)| {
+                        format!(
+                            "{k}={}",
+                            v.as_str().map(str::to_owned).unwrap_or(v.to_string())
+                        )
+                    })
+                    .collect();
+                rest.insert(0, r.method.clone());
+                let label = rest.join(" ");
+                match lines.iter_mut().find(|l| l.0 == label) {
+                    Some(l) => l.1.push((x, e.rmse)),
+                    None => lines.push((label, vec![(x, e.rmse)])),
+                }
+            }
+            lines.retain(|l| l.1.len() >= 3);
+            if lines.is_empty() {
+                continue;
+            }
+            let series: Vec<Series> = lines
+                .into_iter()
+                .enumerate()
+                .map(|(i, (label, mut pts))| {
+                    pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+                    (label, PALETTE[i % PALETTE.len()], pts, true)
+                })
+                .collect();
+            let path = need(
+                &mut written,
+                format!("error_vs_{}_{}.png", file_safe(name), file_safe(scene)),
+            )?;
+            scatter(
+                &path,
+                &format!("{}: {scene}: error against {name}", s.experiment),
+                name,
+                "RMSE of the surface caustic",
+                &series,
+            )?;
+        }
+    }
+    // Fill-rate heatmaps of every run of a scene side by side, with their colour bars.
+    if let Some(root) = dir.parent() {
+        for scene in &scenes {
+            let tiles: Vec<(String, Rgb8Image)> = done
+                .iter()
+                .filter(|r| &r.scene == scene)
+                .filter_map(|r| {
+                    let p = root.join(r.dir.as_ref()?).join("fill_heatmap.png");
+                    let img = caustics_metrics::read_png(&p).ok()?;
+                    Some((bar_label(r), img))
+                })
+                .collect();
+            if tiles.len() < 2 {
+                continue;
+            }
+            let path = need(&mut written, format!("heatmaps_{}.png", file_safe(scene)))?;
+            tile(
+                &path,
+                &format!("{}: {scene}: fragments per pixel", s.experiment),
+                &tiles,
+            )?;
+        }
+    }
+    let frags: Vec<(&Row, u64)> = done
+        .iter()
+        .filter_map(|r| Some((*r, r.fragments?)))
+        .collect();
+    if !frags.is_empty() {
+        let path = need(&mut written, "fragments.png".into())?;
+        fragments_plot(&path, &frags, &methods)?;
+    }
+    Ok(written)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pareto_front_keeps_only_unbeaten_runs() {
+        let f = pareto_front(&[(1.0, 5.0), (2.0, 3.0), (3.0, 4.0), (4.0, 1.0), (0.5, 9.0)]);
+        assert_eq!(f, vec![(0.5, 9.0), (1.0, 5.0), (2.0, 3.0), (4.0, 1.0)]);
+    }
+
+    #[test]
+    fn ticks_are_inside_the_axis_and_round() {
+        let a = Axis::fit(&[0.0, 9.3]);
+        let t = a.ticks();
+        assert!(
+            t.len() >= 3 && t.iter().all(|v| *v >= a.lo && *v <= a.hi),
+            "{t:?}"
+        );
+        assert!(t.contains(&2.0) || t.contains(&5.0), "{t:?}");
+        let l = Axis::fit(&[0.01, 30.0]);
+        assert!(l.log);
+        assert!(l.ticks().contains(&1.0));
+        assert_eq!(tick_label(500.0), "500");
+        assert_eq!(tick_label(0.25), "0.25");
+        assert_eq!(tick_label(1500.0), "1500");
+    }
+
+    #[test]
+    fn a_scatter_plot_draws_points_and_text() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let p = dir.path().join("p.png");
+        scatter(
+            &p,
+            "title",
+            "x",
+            "y",
+            &[("a".into(), PALETTE[0], vec![(1.0, 2.0), (2.0, 1.0)], false)],
+        )
+        .expect("plot");
+        let img = caustics_metrics::read_png(&p).expect("png");
+        assert_eq!((img.width, img.height), (720, 420));
+        assert!(img.pixels.contains(&PALETTE[0]), "no point drawn");
+        assert!(img.pixels.contains(&INK), "no text or frame drawn");
+    }
+}

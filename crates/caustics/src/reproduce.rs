@@ -1,0 +1,501 @@
+//! `caustics reproduce NAME|all` and `caustics merge`: run an experiment's
+//! (scene, method, parameter set) list through [`crate::run::run_scene`], one shard of
+//! it with `--shard k/n`, and write the per-run results plus a summary
+//! (`summary.json`, `summary.md`, `bmf.json`, `plots/`).
+//!
+//! Layout of `<out>/<experiment>/`:
+//!
+//! ```text
+//! manifest.json                      experiment, file hash, scale, shard, status of every run
+//! runs/<params>/<scene>/<method>/    result.json and images of one run (`caustics run`'s layout)
+//! summary.json summary.md bmf.json   written from the manifest and the result files
+//! plots/*.png
+//! ```
+
+use std::collections::BTreeSet;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use indicatif::{ProgressBar, ProgressStyle};
+use serde::{Deserialize, Serialize};
+
+use crate::experiment::{Experiment, RunSpec, parse_shard};
+use crate::run::{RunOptions, RunOutcome, run_scene};
+
+/// Flags of `caustics reproduce`.
+#[derive(Clone, Debug, clap::Args)]
+pub struct ReproduceArgs {
+    /// Experiment name (a file in bench/experiments/), a path to an experiment file, or
+    /// `all`.
+    pub name: String,
+    /// Multiplies every run's resolution (e.g. 0.5 for a quick pass).
+    #[arg(long, default_value_t = 1.0)]
+    pub scale: f64,
+    /// Output root; each experiment goes to DIR/<experiment>/.
+    #[arg(long, value_name = "DIR", default_value = "results/reproduce")]
+    pub out: PathBuf,
+    /// Run only shard k of n (1-based): runs k, k+n, k+2n, ... of the experiment.
+    #[arg(long, value_name = "K/N")]
+    pub shard: Option<String>,
+    /// Reference cache root.
+    #[arg(long, value_name = "DIR", default_value = crate::references::DEFAULT_ROOT)]
+    pub references: PathBuf,
+    /// Do not render missing references even where the experiment gives a photon
+    /// budget (runs without a reference are made without errors).
+    #[arg(long)]
+    pub no_render_references: bool,
+    /// Folder of experiment files.
+    #[arg(long, value_name = "DIR")]
+    pub experiments: Option<PathBuf>,
+    /// Substring of the adapter name (see `caustics run --adapter`).
+    #[arg(long)]
+    pub adapter: Option<String>,
+    /// Keep the EXR images of every run (by default only PNGs and result.json stay).
+    #[arg(long)]
+    pub keep_exr: bool,
+    /// Run nothing: rewrite summary.md, summary.json, bmf.json and plots/ of an earlier
+    /// reproduction in the output folder from its manifest and result files.
+    #[arg(long, conflicts_with = "shard")]
+    pub summary_only: bool,
+}
+
+/// Bumped when a field of the manifest or summary changes meaning.
+pub const MANIFEST_VERSION: u32 = 1;
+
+/// `manifest.json`: which runs a (shard) folder holds and how each ended.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Manifest {
+    /// [`MANIFEST_VERSION`].
+    pub schema_version: u32,
+    /// Experiment name.
+    pub experiment: String,
+    /// Hash of the experiment file's bytes.
+    pub experiment_hash: String,
+    /// `--scale`.
+    pub scale: f64,
+    /// `[k, n]`; `[1, 1]` for an unsharded or merged folder.
+    pub shard: [usize; 2],
+    /// Shards merged into this folder (their `k`), empty unless made by `merge`.
+    #[serde(default)]
+    pub merged_from: Vec<usize>,
+    /// Every run of this shard, in experiment order.
+    pub runs: Vec<RunStatus>,
+    /// References that were missing and not rendered: `<scene> <w>x<h>`.
+    pub missing_references: Vec<String>,
+    /// References rendered for this reproduction: `<scene> <w>x<h> (<photons> photons)`.
+    pub rendered_references: Vec<String>,
+}
+
+/// How one run ended.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RunStatus {
+    /// Position in the experiment.
+    pub index: usize,
+    /// `<scene>/<method>/<params>`.
+    pub key: String,
+    /// "done", "skipped" or "failed".
+    pub status: String,
+    /// Folder of `result.json`, relative to the experiment folder (done runs).
+    #[serde(default)]
+    pub dir: Option<String>,
+    /// Why it was skipped or failed.
+    #[serde(default)]
+    pub reason: Option<String>,
+}
+
+/// What `reproduce` did, for the caller's exit code.
+#[derive(Debug)]
+pub struct Outcome {
+    /// The experiment folders written.
+    pub dirs: Vec<PathBuf>,
+    /// Runs that failed (the rest were written).
+    pub failed: usize,
+}
+
+fn bar(len: u64, what: &str) -> ProgressBar {
+    let bar = ProgressBar::new(len);
+    let style = ProgressStyle::with_template(&format!(
+        "{{elapsed_precise}} [{{bar:30}}] {{pos}}/{{len}} {what} (ETA {{eta}}) {{msg}}"
+    ))
+    .unwrap_or_else(|_| ProgressStyle::default_bar());
+    bar.set_style(style.progress_chars("=> "));
+    bar
+}
+
+/// Runs `caustics reproduce`. Every experiment named is loaded and validated before the
+/// first run, so a bad file stops everything before any work or write.
+pub fn reproduce(args: &ReproduceArgs) -> Result<Outcome> {
+    let dir = args
+        .experiments
+        .clone()
+        .unwrap_or_else(crate::experiment::builtin_dir);
+    let shard = args.shard.as_deref().map(parse_shard).transpose()?;
+    let files = crate::experiment::resolve(&args.name, &dir)?;
+    let experiments = files
+        .iter()
+        .map(|f| Experiment::load(f, args.scale))
+        .collect::<std::result::Result<Vec<_>, _>>()?;
+    let mut outcome = Outcome {
+        dirs: Vec::new(),
+        failed: 0,
+    };
+    for e in &experiments {
+        let out = args.out.join(&e.def.name);
+        if args.summary_only {
+            let manifest = read_manifest(&out)?;
+            if manifest.experiment_hash != e.hash || manifest.scale != args.scale {
+                bail!(
+                    "{}: made from another version of {} or another --scale ({}); run it again",
+                    out.join("manifest.json").display(),
+                    e.file.display(),
+                    manifest.scale
+                );
+            }
+            let s = crate::summary::write_all(&out, e, &manifest)?;
+            outcome.failed += s.failed;
+            eprintln!("{}: summary rewritten", out.join("summary.md").display());
+            outcome.dirs.push(out);
+            continue;
+        }
+        let failed = reproduce_one(e, args, shard.unwrap_or((1, 1)), &out)?;
+        outcome.failed += failed;
+        outcome.dirs.push(out);
+    }
+    Ok(outcome)
+}
+
+fn reproduce_one(
+    e: &Experiment,
+    args: &ReproduceArgs,
+    (k, n): (usize, usize),
+    out: &Path,
+) -> Result<usize> {
+    let runs = e.shard(k, n);
+    let start = Instant::now();
+    eprintln!(
+        "{}: {} of {} runs{} -> {}",
+        e.def.name,
+        runs.len(),
+        e.runs.len(),
+        if n > 1 {
+            format!(" (shard {k}/{n})")
+        } else {
+            String::new()
+        },
+        out.display()
+    );
+    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    let (rendered, missing) = ensure_references(e, &runs, args)?;
+    let progress = bar(runs.len() as u64, "runs");
+    // A steady tick redraws the bar below the lines each run prints to stderr.
+    progress.enable_steady_tick(std::time::Duration::from_millis(500));
+    let mut statuses = Vec::new();
+    for spec in &runs {
+        progress.set_message(spec.key());
+        let status = run_one(e, spec, args, out);
+        if status.status == "failed" {
+            progress.println(format!(
+                "failed: {}: {}",
+                spec.key(),
+                status.reason.as_deref().unwrap_or("")
+            ));
+        }
+        statuses.push(status);
+        progress.inc(1);
+    }
+    progress.finish_and_clear();
+    let failed = statuses.iter().filter(|s| s.status == "failed").count();
+    let manifest = Manifest {
+        schema_version: MANIFEST_VERSION,
+        experiment: e.def.name.clone(),
+        experiment_hash: e.hash.clone(),
+        scale: args.scale,
+        shard: [k, n],
+        merged_from: Vec::new(),
+        runs: statuses,
+        missing_references: missing,
+        rendered_references: rendered,
+    };
+    write_manifest(out, &manifest)?;
+    let summary = crate::summary::write_all(out, e, &manifest)?;
+    eprintln!(
+        "{}: {} done, {} skipped, {} failed in {:.1} s; summary in {}",
+        e.def.name,
+        summary.done,
+        summary.skipped,
+        failed,
+        start.elapsed().as_secs_f64(),
+        out.join("summary.md").display()
+    );
+    Ok(failed)
+}
+
+fn write_manifest(out: &Path, m: &Manifest) -> Result<()> {
+    caustics_metrics::atomic_write(&out.join("manifest.json"), &serde_json::to_vec_pretty(m)?)?;
+    Ok(())
+}
+
+/// Reads `<dir>/manifest.json`.
+pub fn read_manifest(dir: &Path) -> Result<Manifest> {
+    let p = dir.join("manifest.json");
+    let text = std::fs::read_to_string(&p).with_context(|| {
+        format!(
+            "reading {}: not a `caustics reproduce` output folder",
+            p.display()
+        )
+    })?;
+    serde_json::from_str(&text).with_context(|| format!("{}: not a manifest.json", p.display()))
+}
+
+/// Renders the references the shard's runs need and the cache lacks, when the experiment
+/// states a photon budget; returns (rendered, still missing).
+fn ensure_references(
+    e: &Experiment,
+    runs: &[&RunSpec],
+    args: &ReproduceArgs,
+) -> Result<(Vec<String>, Vec<String>)> {
+    let mut seen = BTreeSet::new();
+    let (mut rendered, mut missing) = (Vec::new(), Vec::new());
+    for spec in runs {
+        let scene = &spec.scene;
+        let label = format!(
+            "{} {}x{}",
+            scene.name, scene.camera.width, scene.camera.height
+        );
+        // Only for runs that will happen: a method that skips the scene needs none.
+        let params = serde_json::Value::Object(spec.params.clone());
+        let runnable = crate::registry::find(&spec.method)?
+            .supports(scene, &params)
+            .is_ok();
+        if !runnable
+            || seen.contains(&label)
+            || crate::references::find(&args.references, scene)?.is_some()
+        {
+            continue;
+        }
+        seen.insert(label.clone());
+        match e.def.reference.filter(|_| !args.no_render_references) {
+            Some(budget) => {
+                let dir = crate::references::cache_dir(&args.references, scene);
+                let progress = bar(budget.photons, &format!("photons, reference {label}"));
+                let tick = |done: u64| progress.set_position(done);
+                let rel = crate::reference_cmd::render_into(
+                    &dir,
+                    scene,
+                    budget.photons,
+                    budget.seed,
+                    budget.batches,
+                    &tick,
+                )
+                .with_context(|| format!("rendering the reference of {label}"))?;
+                progress.finish_and_clear();
+                eprintln!(
+                    "reference {label}: {} photons, mean relative standard error {:.1}% -> {}",
+                    budget.photons,
+                    100.0 * rel,
+                    dir.display()
+                );
+                rendered.push(format!("{label} ({} photons)", budget.photons));
+            }
+            None => missing.push(label),
+        }
+    }
+    if !missing.is_empty() {
+        eprintln!(
+            "no reference for {} (the experiment gives no photon budget{}): those runs have no errors",
+            missing.join(", "),
+            if args.no_render_references {
+                ", or --no-render-references"
+            } else {
+                ""
+            }
+        );
+    }
+    Ok((rendered, missing))
+}
+
+fn run_one(e: &Experiment, spec: &RunSpec, args: &ReproduceArgs, out: &Path) -> RunStatus {
+    let rel = Path::new("runs").join(&spec.slug);
+    let o = RunOptions {
+        scene: spec.scene.source.display().to_string(),
+        method: spec.method.clone(),
+        params: spec.param_flags(),
+        frames: spec.frames,
+        warmup: spec.warmup,
+        reference: None,
+        out: out.join(&rel),
+        adapter: args.adapter.clone(),
+        exposure: e.def.exposure,
+        references: args.references.clone(),
+    };
+    let status = |status: &str, dir: Option<String>, reason: Option<String>| RunStatus {
+        index: spec.index,
+        key: spec.key(),
+        status: status.into(),
+        dir,
+        reason,
+    };
+    match run_scene(&o, spec.scene.clone()) {
+        Ok(RunOutcome::Done { dir, .. }) => {
+            if !args.keep_exr {
+                for f in ["surface.exr", "volume.exr", "direct.exr"] {
+                    let _ = std::fs::remove_file(dir.join(f));
+                }
+            }
+            let rel = rel.join(&spec.scene.name).join(&spec.method);
+            status("done", Some(rel.display().to_string()), None)
+        }
+        Ok(RunOutcome::Skipped { reason }) => status("skipped", None, Some(reason)),
+        Err(err) => status("failed", None, Some(format!("{err:#}"))),
+    }
+}
+
+/// Flags of `caustics merge`.
+#[derive(Clone, Debug, clap::Args)]
+pub struct MergeArgs {
+    /// Shard folders (each `<out>/<experiment>/` of a `reproduce --shard k/n`).
+    #[arg(required = true, num_args = 1..)]
+    pub shards: Vec<PathBuf>,
+    /// Folder of the merged experiment (must not exist or be empty).
+    #[arg(long, value_name = "DIR")]
+    pub out: PathBuf,
+    /// Folder of experiment files.
+    #[arg(long, value_name = "DIR")]
+    pub experiments: Option<PathBuf>,
+}
+
+/// Merges shard folders into one, as if the experiment had run unsharded: checks that
+/// they come from the same experiment file, scale and shard count, that every shard is
+/// there exactly once, then copies the runs and writes the summary.
+pub fn merge(args: &MergeArgs) -> Result<PathBuf> {
+    let manifests = args
+        .shards
+        .iter()
+        .map(|d| read_manifest(d))
+        .collect::<Result<Vec<_>>>()?;
+    let first = &manifests[0];
+    for (m, d) in manifests.iter().zip(&args.shards) {
+        if (&m.experiment, &m.experiment_hash, m.scale, m.shard[1])
+            != (
+                &first.experiment,
+                &first.experiment_hash,
+                first.scale,
+                first.shard[1],
+            )
+        {
+            bail!(
+                "{}: shard of {} (file hash {}, scale {}, {} shards), but {} is of {} (file hash {}, scale {}, {} shards)",
+                d.display(),
+                m.experiment,
+                m.experiment_hash,
+                m.scale,
+                m.shard[1],
+                args.shards[0].display(),
+                first.experiment,
+                first.experiment_hash,
+                first.scale,
+                first.shard[1]
+            );
+        }
+    }
+    let n = first.shard[1];
+    let ks: BTreeSet<usize> = manifests.iter().map(|m| m.shard[0]).collect();
+    if ks.len() != manifests.len() || ks.len() != n {
+        let have: Vec<String> = manifests
+            .iter()
+            .map(|m| format!("{}/{}", m.shard[0], n))
+            .collect();
+        bail!(
+            "merge needs each of the {n} shards exactly once, got {}",
+            have.join(", ")
+        );
+    }
+    let dir = args
+        .experiments
+        .clone()
+        .unwrap_or_else(crate::experiment::builtin_dir);
+    let files = crate::experiment::resolve(&first.experiment, &dir)?;
+    let e = Experiment::load(&files[0], first.scale)?;
+    if e.hash != first.experiment_hash {
+        bail!(
+            "{}: changed since the shards ran (hash {} now, {} then)",
+            e.file.display(),
+            e.hash,
+            first.experiment_hash
+        );
+    }
+    if args.out.exists()
+        && std::fs::read_dir(&args.out)
+            .with_context(|| format!("reading {}", args.out.display()))?
+            .next()
+            .is_some()
+    {
+        bail!(
+            "--out {}: exists and is not empty; merge writes a fresh folder",
+            args.out.display()
+        );
+    }
+    let mut runs: Vec<RunStatus> = Vec::new();
+    for (m, d) in manifests.iter().zip(&args.shards) {
+        for r in &m.runs {
+            if let Some(rel) = &r.dir {
+                let from = d.join(rel);
+                if !from.join("result.json").is_file() {
+                    bail!("{}: missing (listed in its manifest)", from.display());
+                }
+            }
+            runs.push(r.clone());
+        }
+    }
+    runs.sort_by_key(|r| r.index);
+    let expected: Vec<usize> = (0..e.runs.len()).collect();
+    if runs.iter().map(|r| r.index).collect::<Vec<_>>() != expected {
+        bail!(
+            "the shards hold {} runs, the experiment has {}: some shard is incomplete",
+            runs.len(),
+            e.runs.len()
+        );
+    }
+    for (m, d) in manifests.iter().zip(&args.shards) {
+        for r in &m.runs {
+            if let Some(rel) = &r.dir {
+                copy_dir(&d.join(rel), &args.out.join(rel))?;
+            }
+        }
+    }
+    let union = |f: fn(&Manifest) -> &Vec<String>| -> Vec<String> {
+        let s: BTreeSet<String> = manifests.iter().flat_map(|m| f(m).clone()).collect();
+        s.into_iter().collect()
+    };
+    let manifest = Manifest {
+        schema_version: MANIFEST_VERSION,
+        experiment: first.experiment.clone(),
+        experiment_hash: first.experiment_hash.clone(),
+        scale: first.scale,
+        shard: [1, 1],
+        merged_from: ks.into_iter().collect(),
+        runs,
+        missing_references: union(|m| &m.missing_references),
+        rendered_references: union(|m| &m.rendered_references),
+    };
+    write_manifest(&args.out, &manifest)?;
+    crate::summary::write_all(&args.out, &e, &manifest)?;
+    Ok(args.out.clone())
+}
+
+fn copy_dir(from: &Path, to: &Path) -> Result<()> {
+    std::fs::create_dir_all(to).with_context(|| format!("creating {}", to.display()))?;
+    for entry in std::fs::read_dir(from).with_context(|| format!("reading {}", from.display()))? {
+        let entry = entry?;
+        let path = entry.path();
+        if path.is_file() {
+            let bytes =
+                std::fs::read(&path).with_context(|| format!("reading {}", path.display()))?;
+            caustics_metrics::atomic_write(&to.join(entry.file_name()), &bytes)?;
+        }
+    }
+    Ok(())
+}

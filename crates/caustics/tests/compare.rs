@@ -1,0 +1,371 @@
+//! The regression gate is itself tested (STYLE 6): it flags a 10% slowdown outside the
+//! noise, a changed fragment count and a worse error, does not flag identical runs or a
+//! change inside the noise, and refuses bad folders clearly without writing anything.
+
+use std::path::Path;
+use std::process::Command;
+
+use caustics::compare::{CompareArgs, Verdict, compare};
+use serde_json::Value;
+
+/// A real result file from the repository, with synthetic per-frame samples.
+fn template() -> Value {
+    let p = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../results/foundation/water_pool/wavefront/result.json");
+    let mut v: Value =
+        serde_json::from_str(&std::fs::read_to_string(&p).expect("template")).expect("json");
+    set_times(&mut v, 10.0, 1.0);
+    v
+}
+
+/// Deterministic "noisy" frame times around `centre` × `scale`: ±1% jitter.
+fn samples(centre: f64, scale: f64) -> Vec<f64> {
+    (0..20)
+        .map(|i| scale * centre * (1.0 + 0.01 * (((i * 7) % 11) as f64 - 5.0) / 5.0))
+        .collect()
+}
+
+fn summary(values: &[f64]) -> Value {
+    serde_json::to_value(caustics::stats::summarize(values).expect("samples")).expect("json")
+}
+
+fn set_times(v: &mut Value, method_ms: f64, scale: f64) {
+    v["timing"]["method_gpu_ms"] = summary(&samples(method_ms, scale));
+    v["timing"]["frame_gpu_ms"] = summary(&samples(method_ms + 5.0, scale));
+}
+
+fn write(dir: &Path, v: &Value) {
+    let d = dir.join("runs/default/water_pool/wavefront");
+    std::fs::create_dir_all(&d).expect("mkdir");
+    std::fs::write(
+        d.join("result.json"),
+        serde_json::to_vec_pretty(v).expect("json"),
+    )
+    .expect("write");
+}
+
+fn args(base: &Path, new: &Path) -> CompareArgs {
+    CompareArgs {
+        base: base.into(),
+        new: new.into(),
+        time_threshold: 0.05,
+        alpha: 0.01,
+        count_tolerance: 0.0,
+        error_tolerance: 0.02,
+        noise_k: 0.5,
+        no_timings: false,
+        verbose: false,
+    }
+}
+
+fn pair(base: &Value, new: &Value) -> (tempfile::TempDir, CompareArgs) {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let (b, n) = (tmp.path().join("base"), tmp.path().join("new"));
+    write(&b, base);
+    write(&n, new);
+    let a = args(&b, &n);
+    (tmp, a)
+}
+
+fn regressions_in(a: &CompareArgs) -> Vec<String> {
+    let r = compare(a).expect("compare");
+    r.lines
+        .iter()
+        .filter(|l| l.verdict == Verdict::Regression)
+        .map(|l| l.measure.clone())
+        .collect()
+}
+
+#[test]
+fn identical_runs_are_not_flagged() {
+    let v = template();
+    let (_t, a) = pair(&v, &v);
+    let r = compare(&a).expect("compare");
+    assert_eq!(r.regressions(), 0, "{}", r.table(true));
+    assert_eq!(r.runs, 1);
+    assert!(r.lines.len() > 10, "compared too little: {}", r.table(true));
+}
+
+#[test]
+fn a_ten_percent_slowdown_outside_the_noise_is_flagged() {
+    let base = template();
+    let mut new = base.clone();
+    set_times(&mut new, 10.0, 1.1);
+    let (_t, a) = pair(&base, &new);
+    let regs = regressions_in(&a);
+    assert!(regs.contains(&"method GPU ms".to_owned()), "{regs:?}");
+    // Gated off for CI, it is still shown.
+    let r = compare(&CompareArgs {
+        no_timings: true,
+        ..a.clone()
+    })
+    .expect("compare");
+    assert_eq!(r.regressions(), 0, "{}", r.table(false));
+    assert!(r.table(false).contains("--no-timings"));
+    // A 10% speed-up is better, not a regression.
+    let mut faster = base.clone();
+    set_times(&mut faster, 10.0, 0.9);
+    let (_t, a) = pair(&base, &faster);
+    let r = compare(&a).expect("compare");
+    assert_eq!(r.regressions(), 0, "{}", r.table(false));
+    assert!(r.lines.iter().any(|l| l.verdict == Verdict::Better));
+}
+
+#[test]
+fn a_slowdown_inside_the_noise_or_below_the_threshold_is_not_flagged() {
+    let base = template();
+    // 2% slower: significant with this little jitter, but under the 5% minimum effect.
+    let mut new = base.clone();
+    set_times(&mut new, 10.0, 1.02);
+    let (_t, a) = pair(&base, &new);
+    assert!(regressions_in(&a).is_empty());
+    // 10% slower median but with huge noise: not significant.
+    let mut noisy_base = base.clone();
+    let wide: Vec<f64> = (0..20).map(|i| 5.0 + (i % 10) as f64).collect();
+    let wide_new: Vec<f64> = wide.iter().map(|v| v * 1.1).collect();
+    noisy_base["timing"]["method_gpu_ms"] = summary(&wide[..6]);
+    let mut noisy_new = base.clone();
+    noisy_new["timing"]["method_gpu_ms"] = summary(&wide_new[..6]);
+    let (_t, a) = pair(&noisy_base, &noisy_new);
+    assert!(!regressions_in(&a).contains(&"method GPU ms".to_owned()));
+}
+
+#[test]
+fn old_files_without_samples_use_the_percentile_ranges() {
+    let mut base = template();
+    let mut new = base.clone();
+    set_times(&mut new, 10.0, 1.2);
+    for v in [&mut base, &mut new] {
+        for k in ["method_gpu_ms", "frame_gpu_ms"] {
+            v["timing"][k]
+                .as_object_mut()
+                .expect("obj")
+                .remove("values");
+        }
+    }
+    let (_t, a) = pair(&base, &new);
+    assert!(regressions_in(&a).contains(&"method GPU ms".to_owned()));
+}
+
+#[test]
+fn a_changed_fragment_count_or_counter_is_flagged() {
+    let base = template();
+    let mut new = base.clone();
+    let f = new["fragments"]["method_total"].as_u64().expect("u64");
+    new["fragments"]["method_total"] = (f + 1).into();
+    new["counters"]["kept_triangles"] = 5.into();
+    let (_t, a) = pair(&base, &new);
+    let regs = regressions_in(&a);
+    assert!(regs.contains(&"fragments (method)".to_owned()), "{regs:?}");
+    assert!(
+        regs.contains(&"counter kept_triangles".to_owned()),
+        "{regs:?}"
+    );
+    // A stated tolerance admits the one-fragment change but not the counter.
+    let regs = regressions_in(&CompareArgs {
+        count_tolerance: 0.01,
+        ..a
+    });
+    assert!(!regs.contains(&"fragments (method)".to_owned()), "{regs:?}");
+    assert!(
+        regs.contains(&"counter kept_triangles".to_owned()),
+        "{regs:?}"
+    );
+}
+
+#[test]
+fn errors_are_gated_against_the_reference_noise() {
+    let base = template();
+    let rmse = base["errors"]["surface"]["rmse"].as_f64().expect("rmse");
+    let noise = base["errors"]["reference_noise_rms"]
+        .as_f64()
+        .expect("noise");
+    // Inside half the reference noise: no change.
+    let mut within = base.clone();
+    within["errors"]["surface"]["rmse"] = (rmse + 0.4 * noise).into();
+    let (_t, a) = pair(&base, &within);
+    assert!(regressions_in(&a).is_empty());
+    // Beyond it: worse.
+    let mut worse = base.clone();
+    worse["errors"]["surface"]["rmse"] = (rmse + 2.0 * noise).into();
+    worse["errors"]["surface"]["flip"] = 0.2.into();
+    let (_t, a) = pair(&base, &worse);
+    let regs = regressions_in(&a);
+    assert!(regs.contains(&"error RMSE".to_owned()), "{regs:?}");
+    assert!(regs.contains(&"error FLIP".to_owned()), "{regs:?}");
+}
+
+#[test]
+fn missing_runs_changed_inputs_and_new_runs() {
+    let base = template();
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let (b, n) = (tmp.path().join("base"), tmp.path().join("new"));
+    write(&b, &base);
+    // NEW holds another run only.
+    let d = n.join("runs/default/ring/wavefront");
+    std::fs::create_dir_all(&d).expect("mkdir");
+    std::fs::write(
+        d.join("result.json"),
+        serde_json::to_vec(&base).expect("json"),
+    )
+    .expect("write");
+    let r = compare(&args(&b, &n)).expect("compare");
+    assert_eq!(r.regressions(), 1, "{}", r.table(true));
+    assert!(r.lines.iter().any(|l| l.verdict == Verdict::New));
+    // Same run, other parameters: not comparable.
+    let mut other = base.clone();
+    other["method"]["params"] = serde_json::json!({"grid": 64});
+    let (_t, a) = pair(&base, &other);
+    assert_eq!(regressions_in(&a), vec!["inputs".to_owned()]);
+}
+
+fn listing(root: &Path) -> Vec<(String, Vec<u8>)> {
+    let mut out = Vec::new();
+    let mut stack = vec![root.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).expect("read_dir") {
+            let p = e.expect("entry").path();
+            if p.is_dir() {
+                stack.push(p);
+            } else {
+                out.push((p.display().to_string(), std::fs::read(&p).expect("read")));
+            }
+        }
+    }
+    out.sort();
+    out
+}
+
+#[test]
+fn the_binary_exits_2_on_a_regression_and_1_on_bad_folders_writing_nothing() {
+    let bin = env!("CARGO_BIN_EXE_caustics");
+    let base = template();
+    let mut new = base.clone();
+    set_times(&mut new, 10.0, 1.1);
+    let (t, a) = pair(&base, &new);
+    let before = listing(t.path());
+    let o = Command::new(bin)
+        .args([
+            "compare",
+            a.base.to_str().expect("utf8"),
+            a.new.to_str().expect("utf8"),
+        ])
+        .output()
+        .expect("run");
+    assert_eq!(
+        o.status.code(),
+        Some(2),
+        "{}",
+        String::from_utf8_lossy(&o.stdout)
+    );
+    assert!(String::from_utf8_lossy(&o.stdout).contains("REGRESSION"));
+    let o = Command::new(bin)
+        .args([
+            "compare",
+            a.base.to_str().expect("utf8"),
+            a.base.to_str().expect("utf8"),
+        ])
+        .output()
+        .expect("run");
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stdout)
+    );
+
+    let missing = t.path().join("nope");
+    let o = Command::new(bin)
+        .args([
+            "compare",
+            a.base.to_str().expect("utf8"),
+            missing.to_str().expect("utf8"),
+        ])
+        .output()
+        .expect("run");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("nope") && err.contains("no such folder"),
+        "{err}"
+    );
+
+    let empty = t.path().join("empty");
+    std::fs::create_dir_all(&empty).expect("mkdir");
+    let o = Command::new(bin)
+        .args([
+            "compare",
+            empty.to_str().expect("utf8"),
+            a.new.to_str().expect("utf8"),
+        ])
+        .output()
+        .expect("run");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("holds no result.json"), "{err}");
+
+    let corrupt = t.path().join("corrupt/x");
+    std::fs::create_dir_all(&corrupt).expect("mkdir");
+    std::fs::write(corrupt.join("result.json"), b"{\"schema_version\": 1").expect("write");
+    let o = Command::new(bin)
+        .args([
+            "compare",
+            a.base.to_str().expect("utf8"),
+            t.path().join("corrupt").to_str().expect("utf8"),
+        ])
+        .output()
+        .expect("run");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("not a result.json"), "{err}");
+
+    let o = Command::new(bin)
+        .args([
+            "compare",
+            "--alpha",
+            "2",
+            a.base.to_str().expect("utf8"),
+            a.new.to_str().expect("utf8"),
+        ])
+        .output()
+        .expect("run");
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--alpha"));
+
+    let mut after = listing(t.path());
+    after.retain(|(p, _)| !p.contains("/empty") && !p.contains("/corrupt"));
+    assert_eq!(before, after, "compare wrote or changed files");
+}
+
+#[test]
+fn in_a_reproduce_folder_only_the_manifest_runs_count() {
+    let base = template();
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let (b, n) = (tmp.path().join("base"), tmp.path().join("new"));
+    write(&b, &base);
+    write(&n, &base);
+    // A stale run of an earlier reproduction into NEW, with another fragment count.
+    let mut stale = base.clone();
+    stale["fragments"]["method_total"] = 1.into();
+    let d = n.join("runs/old/water_pool/wavefront");
+    std::fs::create_dir_all(&d).expect("mkdir");
+    std::fs::write(
+        d.join("result.json"),
+        serde_json::to_vec(&stale).expect("json"),
+    )
+    .expect("write");
+    let manifest = serde_json::json!({
+        "schema_version": 1, "experiment": "x", "experiment_hash": "0", "scale": 1.0,
+        "shard": [1, 1], "merged_from": [], "missing_references": [], "rendered_references": [],
+        "runs": [{"index": 0, "key": "water_pool/wavefront/default", "status": "done",
+                  "dir": "runs/default/water_pool/wavefront", "reason": null}]
+    });
+    std::fs::write(n.join("manifest.json"), manifest.to_string()).expect("write");
+    let r = compare(&args(&b, &n)).expect("compare");
+    assert_eq!(r.regressions(), 0, "{}", r.table(true));
+    assert!(
+        !r.lines.iter().any(|l| l.run.contains("old")),
+        "{}",
+        r.table(true)
+    );
+}

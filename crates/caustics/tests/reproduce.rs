@@ -1,0 +1,292 @@
+//! `caustics reproduce` and `merge` for real on lavapipe with a tiny experiment: the
+//! summary, plots and Bencher file are written; shards merged equal the unsharded run
+//! on every deterministic figure; bad input fails before anything is written.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use caustics::compare::{CompareArgs, compare};
+use caustics::reproduce::{MergeArgs, ReproduceArgs, merge, read_manifest, reproduce};
+use caustics::summary::read_summary;
+
+const TINY: &str = r#"{
+  "name": "tiny",
+  "description": "two scenes, two methods, a sweep; 32x24",
+  "resolution": {"width": 32, "height": 24},
+  "frames": 2,
+  "warmup": 0,
+  "reference": {"photons": 20000, "seed": 1, "batches": 4},
+  "runs": [
+    {"label": "pinhole", "scenes": ["ring", "sphere_on_plane"], "methods": ["pinhole"],
+     "params": {"samples": [50, 100], "cube_size": 32, "samples_per_pass": 50}},
+    {"label": "wavefront", "scenes": ["ring", "water_pool"], "methods": ["wavefront", "pinhole"],
+     "params": {}}
+  ],
+  "paper": {"source": "none", "hardware": "imaginary GPU",
+            "figures": [{"scene": "ring", "method": "pinhole", "params": {"samples": 50},
+                         "measure": "method_gpu_ms", "value": 42, "note": "made up"}]}
+}"#;
+
+fn setup() -> (tempfile::TempDir, PathBuf) {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let exp = tmp.path().join("experiments");
+    std::fs::create_dir_all(&exp).expect("mkdir");
+    std::fs::write(exp.join("tiny.json"), TINY).expect("write");
+    (tmp, exp)
+}
+
+fn args(tmp: &Path, exp: &Path, out: &str, shard: Option<&str>) -> ReproduceArgs {
+    ReproduceArgs {
+        name: "tiny".into(),
+        scale: 1.0,
+        out: tmp.join(out),
+        shard: shard.map(str::to_owned),
+        references: tmp.join("references"),
+        no_render_references: false,
+        experiments: Some(exp.to_path_buf()),
+        adapter: None,
+        keep_exr: false,
+        summary_only: false,
+    }
+}
+
+/// Everything in the summary but the timings, machine and build.
+fn deterministic(dir: &Path) -> Vec<serde_json::Value> {
+    let s = read_summary(dir).expect("summary");
+    s.runs
+        .iter()
+        .map(|r| {
+            let mut v = serde_json::to_value(r).expect("json");
+            let o = v.as_object_mut().expect("object");
+            o.remove("method_gpu_ms");
+            o.remove("frame_gpu_ms");
+            v
+        })
+        .collect()
+}
+
+#[test]
+fn reproduce_then_shards_merged_equal_the_unsharded_run() {
+    let (tmp, exp) = setup();
+    let t = tmp.path();
+    let whole = reproduce(&args(t, &exp, "whole", None)).expect("reproduce");
+    assert_eq!(whole.failed, 0);
+    let dir = t.join("whole/tiny");
+    let s = read_summary(&dir).expect("summary");
+    // 2 scenes x 2 sample counts, then ring and water_pool x 2 methods.
+    assert_eq!(s.runs.len(), 8);
+    assert_eq!((s.done, s.skipped, s.failed), (7, 1, 0), "{:?}", s.runs);
+    let skipped = s
+        .runs
+        .iter()
+        .find(|r| r.status == "skipped")
+        .expect("one skip");
+    assert_eq!(skipped.key, "water_pool/pinhole/default");
+    assert!(
+        skipped
+            .reason
+            .as_deref()
+            .is_some_and(|r| r.contains("heightfield"))
+    );
+    // References were rendered on demand (one per scene the runs can use) and scored.
+    let manifest = read_manifest(&dir).expect("manifest");
+    assert_eq!(
+        manifest.rendered_references.len(),
+        3,
+        "{:?}",
+        manifest.rendered_references
+    );
+    for r in s.runs.iter().filter(|r| r.status == "done") {
+        assert!(r.errors.is_some() && r.fragments.is_some(), "{}", r.key);
+        assert!(r.method_gpu_ms.is_some(), "{}", r.key);
+    }
+    // The paper's figure sits beside its run.
+    let ring50 = s
+        .runs
+        .iter()
+        .find(|r| r.key.starts_with("ring/pinhole/cube_size=32,samples=50"))
+        .expect("run");
+    assert_eq!(ring50.paper.len(), 1);
+    let md = std::fs::read_to_string(dir.join("summary.md")).expect("md");
+    assert!(
+        md.contains("paper (imaginary GPU)") && md.contains("method_gpu_ms 42"),
+        "{md}"
+    );
+    assert!(md.contains("water_pool/pinhole/default | skipped"), "{md}");
+    for p in [
+        "plots/error_vs_time_ring.png",
+        "plots/fragments.png",
+        "bmf.json",
+    ] {
+        assert!(dir.join(p).is_file(), "{p} missing");
+    }
+    let bmf: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("bmf.json")).expect("bmf")).expect("json");
+    let m = &bmf["tiny/ring/wavefront/default"];
+    assert!(m["method_gpu_ms"]["value"].is_number(), "{bmf}");
+    assert!(
+        m["method_gpu_ms"]["lower_value"].as_f64() <= m["method_gpu_ms"]["upper_value"].as_f64()
+    );
+    assert!(m["fragments"]["value"].is_number() && m["rmse_after_best_scale"]["value"].is_number());
+    // EXRs are dropped by default, PNGs kept.
+    let run = dir.join(ring50.dir.as_deref().expect("dir"));
+    assert!(run.join("composite.png").is_file() && !run.join("surface.exr").exists());
+
+    // The summary can be rewritten from the files alone, identically.
+    let before = std::fs::read(dir.join("summary.json")).expect("summary");
+    std::fs::remove_file(dir.join("summary.md")).expect("rm");
+    reproduce(&ReproduceArgs {
+        summary_only: true,
+        ..args(t, &exp, "whole", None)
+    })
+    .expect("summary only");
+    assert_eq!(
+        before,
+        std::fs::read(dir.join("summary.json")).expect("summary")
+    );
+    assert!(dir.join("summary.md").is_file());
+
+    // The HTML report: self-contained (every image it shows lies beside it).
+    let index = caustics::report::report(&caustics::report::ReportArgs {
+        dir: t.join("whole"),
+        out: Some(t.join("report")),
+    })
+    .expect("report");
+    let html = std::fs::read_to_string(&index).expect("index");
+    assert!(
+        html.contains("ring/pinhole/cube_size=32,samples=50") && html.contains("imaginary GPU")
+    );
+    let srcs: Vec<&str> = html
+        .split("src=\"")
+        .skip(1)
+        .filter_map(|s| s.split('"').next())
+        .collect();
+    assert!(srcs.len() >= 7 * 3, "{srcs:?}");
+    for src in srcs {
+        assert!(t.join("report").join(src).is_file(), "{src} not copied");
+    }
+    let e = caustics::report::report(&caustics::report::ReportArgs {
+        dir: t.join("nothing-here"),
+        out: Some(t.join("report2")),
+    })
+    .expect_err("no folder");
+    assert!(format!("{e:#}").contains("nothing-here"), "{e:#}");
+    assert!(!t.join("report2").exists());
+
+    // Shards (references now cached), merged.
+    for k in ["1/3", "2/3", "3/3"] {
+        let o = reproduce(&args(t, &exp, &format!("shard{}", &k[..1]), Some(k))).expect("shard");
+        assert_eq!(o.failed, 0);
+    }
+    let shards: Vec<PathBuf> = (1..=3).map(|k| t.join(format!("shard{k}/tiny"))).collect();
+    let merged = merge(&MergeArgs {
+        shards: shards.clone(),
+        out: t.join("merged"),
+        experiments: Some(exp.clone()),
+    })
+    .expect("merge");
+    assert_eq!(deterministic(&dir), deterministic(&merged));
+    // And run by run, counts and errors are identical.
+    let report = compare(&CompareArgs {
+        base: dir.clone(),
+        new: merged.clone(),
+        time_threshold: 0.05,
+        alpha: 0.01,
+        count_tolerance: 0.0,
+        error_tolerance: 0.0,
+        noise_k: 0.0,
+        no_timings: true,
+        verbose: false,
+    })
+    .expect("compare");
+    assert_eq!(report.regressions(), 0, "{}", report.table(true));
+    assert_eq!(report.runs, 7);
+
+    // Bad merges: a shard missing, one twice, a non-empty output; nothing is written.
+    let bad = |shards: Vec<PathBuf>, out: PathBuf, needle: &str| {
+        let e = merge(&MergeArgs {
+            shards,
+            out: out.clone(),
+            experiments: Some(exp.clone()),
+        })
+        .expect_err("bad merge");
+        let e = format!("{e:#}");
+        assert!(e.contains(needle), "{e}");
+    };
+    bad(
+        shards[..2].to_vec(),
+        t.join("m2"),
+        "each of the 3 shards exactly once",
+    );
+    assert!(!t.join("m2").exists());
+    bad(
+        vec![shards[0].clone(), shards[0].clone(), shards[1].clone()],
+        t.join("m3"),
+        "exactly once",
+    );
+    bad(shards.clone(), t.join("merged"), "not empty");
+    bad(vec![dir.clone(), shards[0].clone()], t.join("m4"), "shard");
+    assert!(!t.join("m4").exists());
+    // No temporary file is left anywhere.
+    let leftovers = Command::new("find")
+        .args([t.to_str().expect("utf8"), "-name", ".*.tmp-*"])
+        .output()
+        .expect("find");
+    assert!(
+        leftovers.stdout.is_empty(),
+        "{}",
+        String::from_utf8_lossy(&leftovers.stdout)
+    );
+}
+
+#[test]
+fn a_bad_experiment_fails_before_any_run_or_write() {
+    let (tmp, exp) = setup();
+    std::fs::write(
+        exp.join("broken.json"),
+        r#"{"name": "broken", "runs": [{"scenes": ["ring"], "methods": ["splatting-x"]}]}"#,
+    )
+    .expect("write");
+    let out = tmp.path().join("out");
+    let bin = env!("CARGO_BIN_EXE_caustics");
+    // `all` loads every file first: tiny is valid, broken is not, nothing runs.
+    let o = Command::new(bin)
+        .args([
+            "reproduce",
+            "all",
+            "--experiments",
+            exp.to_str().expect("utf8"),
+            "--out",
+            out.to_str().expect("utf8"),
+        ])
+        .output()
+        .expect("run");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("broken.json")
+            && err.contains("runs[0].methods[0]")
+            && err.contains("splatting-x"),
+        "{err}"
+    );
+    assert!(!out.exists(), "reproduce wrote before validating");
+    for (flags, needle) in [
+        (vec!["tiny", "--shard", "3/2"], "--shard"),
+        (vec!["tiny", "--scale", "0"], "--scale"),
+        (vec!["nosuch"], "nosuch"),
+    ] {
+        let mut a = vec![
+            "reproduce",
+            "--experiments",
+            exp.to_str().expect("utf8"),
+            "--out",
+            out.to_str().expect("utf8"),
+        ];
+        a.extend(flags);
+        let o = Command::new(bin).args(&a).output().expect("run");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{err}");
+        assert!(err.contains(needle), "{err}");
+        assert!(!out.exists());
+    }
+}
