@@ -49,7 +49,7 @@ pub mod geometry;
 
 use bytemuck::{Pod, Zeroable};
 use caustics_gpu::binding::{
-    buffer_binding, entry, storage_entry, texture_binding, texture_entry, uniform_entry,
+    buffer_binding, storage_entry, texture_binding, texture_entry, uniform_entry,
 };
 use caustics_gpu::impostor::{IMPOSTOR_TRACE_WGSL, ImpostorAtlas, ImpostorPass};
 use caustics_gpu::textures::{HDR_FORMAT, Target, additive_hdr_target, load_attachment};
@@ -609,14 +609,11 @@ impl BeamMethod {
             label: Some("beam surface filter"),
             entries: &[
                 uniform_entry(0, fs),
-                entry(
+                texture_entry(
                     1,
                     fs,
-                    wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                        view_dimension: d2,
-                        multisampled: false,
-                    },
+                    wgpu::TextureSampleType::Float { filterable: false },
+                    d2,
                 ),
             ],
         });
