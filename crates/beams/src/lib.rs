@@ -58,7 +58,7 @@ use caustics_gpu::{
     CountedPipeline, Frame, GBuffer, GpuContext, GpuScene, LightView, Renderer, shader,
 };
 use caustics_method::{Capabilities, CausticsMethod, Counters, MethodError, Unsupported};
-use caustics_scene::{Aabb, Light, Material, Scene, Shape, Vec3};
+use caustics_scene::{Light, Material, Scene, Shape, Vec3};
 
 pub use config::{BeamConfig, HullKind, SHARED_PARAM_DOCS};
 
@@ -132,21 +132,12 @@ pub fn check_scene(scene: &Scene) -> Result<(), Unsupported> {
             "the scene has no diffuse receiver for the caustic".into(),
         ));
     }
-    if let Some(b) = scene.specular_bounds() {
-        let corners: Vec<Vec3> = (0..8)
-            .map(|i| {
-                Vec3::new(
-                    if i & 1 == 0 { b.min.x } else { b.max.x },
-                    if i & 2 == 0 { b.min.y } else { b.max.y },
-                    if i & 4 == 0 { b.min.z } else { b.max.z },
-                )
-            })
-            .collect();
-        if LightView::fit_points(&scene.lights[0], &corners, 16).is_none() {
-            return Err(Unsupported(
-                "the light is among the specular objects; the light G-buffer must see them from outside".into(),
-            ));
-        }
+    if let Some(b) = scene.specular_bounds()
+        && LightView::fit_points(&scene.lights[0], &b.corners(), 16).is_none()
+    {
+        return Err(Unsupported(
+            "the light is among the specular objects; the light G-buffer must see them from outside".into(),
+        ));
     }
     Ok(())
 }
@@ -240,16 +231,6 @@ const C_CANDIDATES_TOTAL: usize = 27;
 const C_DROPPED_NO_RECEIVER: usize = 28;
 /// Byte offset of the hull draw's arguments in the indirect-arguments buffer.
 const DRAW_ARGS_OFFSET: u64 = 16;
-
-fn corners(b: &Aabb) -> [Vec3; 8] {
-    std::array::from_fn(|i| {
-        Vec3::new(
-            if i & 1 == 0 { b.min.x } else { b.max.x },
-            if i & 2 == 0 { b.min.y } else { b.max.y },
-            if i & 4 == 0 { b.min.z } else { b.max.z },
-        )
-    })
-}
 
 /// The beam pipeline bound to one scene.
 pub struct BeamMethod {
@@ -417,7 +398,8 @@ impl BeamMethod {
                 let dir = direction.normalize();
                 // The reference starts directional photons 1 m before the scene's
                 // bounds along the light; extinction is counted from the same plane.
-                let start = corners(&bounds)
+                let start = bounds
+                    .corners()
                     .iter()
                     .map(|c| c.dot(dir))
                     .fold(f32::INFINITY, f32::min)

@@ -72,16 +72,11 @@ impl LightView {
         let center = bounds.center();
         let radius = bounds.bounding_sphere_radius().max(1e-3);
         let far_from = |p: Vec3| {
-            let corners = [bounds.min, bounds.max];
-            let mut far = 0.0f32;
-            for i in 0..8 {
-                let c = Vec3::new(
-                    corners[i & 1].x,
-                    corners[(i >> 1) & 1].y,
-                    corners[(i >> 2) & 1].z,
-                );
-                far = far.max((c - p).length());
-            }
+            let far = bounds
+                .corners()
+                .iter()
+                .map(|c| (*c - p).length())
+                .fold(0.0, f32::max);
             far * 1.01 + 1e-3
         };
         match *light {

@@ -433,28 +433,11 @@ impl ImpostorPass {
 
 /// Distance from `center` to the farthest corner of `bounds`.
 fn reach_from(bounds: &Aabb, center: Vec3) -> f32 {
-    let mut reach = 0.0f32;
-    for i in 0..8 {
-        let corner = Vec3::new(
-            if i & 1 == 0 {
-                bounds.min.x
-            } else {
-                bounds.max.x
-            },
-            if i & 2 == 0 {
-                bounds.min.y
-            } else {
-                bounds.max.y
-            },
-            if i & 4 == 0 {
-                bounds.min.z
-            } else {
-                bounds.max.z
-            },
-        );
-        reach = reach.max((corner - center).length());
-    }
-    reach
+    bounds
+        .corners()
+        .iter()
+        .map(|c| (*c - center).length())
+        .fold(0.0, f32::max)
 }
 
 /// One impostor of an [`ImpostorAtlas`].

@@ -3,7 +3,6 @@
 //! fill-rate counter and the group-0 bind group that method passes share.
 
 use bytemuck::{Pod, Zeroable};
-use caustics_scene::Vec3;
 use wgpu::util::DeviceExt;
 
 use crate::binding::{entry, storage_entry};
@@ -139,27 +138,11 @@ impl Renderer {
         let cam = &sc.camera;
         let (w, h) = (cam.width, cam.height);
         let bounds = sc.bounds();
-        let mut far = 0.0f32;
-        for i in 0..8 {
-            let c = Vec3::new(
-                if i & 1 == 0 {
-                    bounds.min.x
-                } else {
-                    bounds.max.x
-                },
-                if i & 2 == 0 {
-                    bounds.min.y
-                } else {
-                    bounds.max.y
-                },
-                if i & 4 == 0 {
-                    bounds.min.z
-                } else {
-                    bounds.max.z
-                },
-            );
-            far = far.max((c - cam.eye).length());
-        }
+        let far = bounds
+            .corners()
+            .iter()
+            .map(|c| (*c - cam.eye).length())
+            .fold(0.0, f32::max);
         let far = far * 1.05 + 1e-2;
         let near = (far * 1e-4).max(1e-3);
 

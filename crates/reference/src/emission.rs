@@ -105,16 +105,6 @@ fn specular_spheres(scene: &Scene) -> Vec<(Vec3, f32, Aabb)> {
         .collect()
 }
 
-fn corners(b: &Aabb) -> [Vec3; 8] {
-    std::array::from_fn(|i| {
-        Vec3::new(
-            if i & 1 == 0 { b.min.x } else { b.max.x },
-            if i & 2 == 0 { b.min.y } else { b.max.y },
-            if i & 4 == 0 { b.min.z } else { b.max.z },
-        )
-    })
-}
-
 fn cone(axis: Vec3, cos_max: f32) -> Cone {
     let (b1, b2) = perpendicular_frame(axis);
     Cone {
@@ -164,7 +154,8 @@ impl Emitter {
                         .iter()
                         .map(|(c, r, b)| {
                             let center = *c - c.dot(dir) * dir;
-                            let by_corners = corners(b)
+                            let by_corners = b
+                                .corners()
                                 .iter()
                                 .map(|k| {
                                     let v = *k - *c;
@@ -178,7 +169,8 @@ impl Emitter {
                         })
                         .collect();
                     let cdf = cumulative(discs.iter().map(|d| PI * d.radius * d.radius));
-                    let start = corners(&bounds)
+                    let start = bounds
+                        .corners()
                         .iter()
                         .map(|k| k.dot(dir))
                         .fold(f32::INFINITY, f32::min)
@@ -335,7 +327,8 @@ fn aim_cone(apex: Vec3, c: Vec3, r: f32, b: &Aabb) -> Cone {
     }
     if !b.contains(apex) {
         let axis = (b.center() - apex).normalize();
-        let cos_max = corners(b)
+        let cos_max = b
+            .corners()
             .iter()
             .map(|k| (*k - apex).normalize().dot(axis))
             .fold(1.0f32, f32::min);

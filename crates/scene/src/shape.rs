@@ -224,6 +224,17 @@ impl Aabb {
         0.5 * self.extent().length()
     }
 
+    /// The eight corners (bit 0 of the index picks x, bit 1 y, bit 2 z: 0 = min).
+    pub fn corners(&self) -> [Vec3; 8] {
+        std::array::from_fn(|i| {
+            Vec3::new(
+                if i & 1 == 0 { self.min.x } else { self.max.x },
+                if i & 2 == 0 { self.min.y } else { self.max.y },
+                if i & 4 == 0 { self.min.z } else { self.max.z },
+            )
+        })
+    }
+
     /// True if `p` lies inside or on the box.
     pub fn contains(&self, p: Vec3) -> bool {
         p.cmpge(self.min).all() && p.cmple(self.max).all()
