@@ -136,9 +136,12 @@ pub struct Errors {
     /// [`ssim`](crate::ssim) of the display-referred luminance (range 1), in `[-1, 1]`,
     /// 1 = identical.
     pub ssim: f64,
-    /// Mean [`flip`](crate::flip) of the tone-mapped images, in `[0, 1]`, 0 = identical.
+    /// Mean LDR-[`flip`](crate::flip) of the images tone-mapped at the stated [`ToneMap`]
+    /// exposure, in `[0, 1]`, 0 = identical. Blind to what saturates or quantises to one
+    /// code at that exposure; `hdr_flip` is not.
     pub flip: f64,
-    /// The first value of [`best_scale`].
+    /// The first value of [`best_scale`]: a diagnostic, set by the brightest pixels (the
+    /// focus); normalize with `flux_ratio_image` instead.
     pub best_scale: f64,
     /// The second value of [`best_scale`], W·m⁻²·sr⁻¹.
     pub rmse_after_best_scale: f64,
@@ -151,11 +154,48 @@ pub struct Errors {
     /// same way. Absent in result files written before it existed.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub flip_after_best_scale: Option<f64>,
+    /// [`flux_ratio`](crate::flux_ratio) over the reference's
+    /// [`caustic_region`](crate::caustic_region): `Σ Y(test) / Σ Y(reference)` there, 1 =
+    /// all the light is there. Absent when the reference is black, and in result files
+    /// written before it existed.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub flux_ratio: Option<f64>,
+    /// [`flux_ratio`](crate::flux_ratio) over the whole image. Absent when the reference
+    /// is black, and in older result files.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub flux_ratio_image: Option<f64>,
+    /// [`rel_mse`] (`eps = REL_MSE_EPS`) of the test image divided by `flux_ratio_image`:
+    /// the shape error once the total light is made equal. The whole-image ratio is used,
+    /// not the region's, so that the normalization conserves all the light the method
+    /// drew: light it misplaced outside the caustic region still counts as an error
+    /// instead of being scaled away. Absent when the ratio is absent or 0.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rel_mse_after_flux: Option<f64>,
+    /// Mean [`hdr_flip`](crate::hdr_flip) (exposure-bracketed, Andersson et al. 2021), in
+    /// `[0, 1]`. Absent when the reference is black, and in older result files.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub hdr_flip: Option<f64>,
+    /// Mean HDR-FLIP of the test image divided by `flux_ratio_image`, over the same
+    /// exposure bracket as `hdr_flip`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub hdr_flip_after_flux: Option<f64>,
+    /// First exposure of the HDR-FLIP bracket, in stops (from the reference).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub hdr_flip_start_exposure: Option<f64>,
+    /// Last exposure of the HDR-FLIP bracket, in stops (from the reference).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub hdr_flip_stop_exposure: Option<f64>,
 }
 
 /// Computes every metric of [`Errors`]: RMSE, relMSE and the best scale on the linear
-/// HDR images; PSNR, SSIM and FLIP on the images tone-mapped by `tone` (the stated
-/// exposure), where a caustic's hot spot cannot swamp the range.
+/// HDR images; PSNR, SSIM and (LDR-)FLIP on the images tone-mapped by `tone` (the stated
+/// exposure), where a caustic's hot spot cannot swamp the range; the flux ratios, relMSE
+/// after flux normalization, and HDR-FLIP (its exposure bracket from the reference) before
+/// and after flux normalization.
+///
+/// The flux-based fields lead: they separate "is the light all there" from "is it in the
+/// right place". RMSE and the best scale are dominated by the brightest pixels and kept
+/// as diagnostics. Fields that have no value for a black reference are `None`.
 pub fn all_errors(
     test: &HdrImage,
     reference: &HdrImage,
@@ -165,6 +205,28 @@ pub fn all_errors(
     let (best_scale, rmse_after_best_scale) = best_scale(test, reference)?;
     let (display_test, display_reference) = (tone.display(test), tone.display(reference));
     let rescaled = test.scaled(best_scale as f32);
+    let region = crate::caustic_region(reference);
+    let flux_ratio = crate::flux_ratio(test, reference, Some(&region))?;
+    let flux_ratio_image = crate::flux_ratio(test, reference, None)?;
+    let flux_normalized = flux_ratio_image
+        .filter(|&k| k > 0.0 && k.is_finite())
+        .map(|k| test.scaled((1.0 / k) as f32));
+    let rel_mse_after_flux = match &flux_normalized {
+        Some(t) => Some(rel_mse(t, reference, REL_MSE_EPS)?),
+        None => None,
+    };
+    let (mut hdr, mut hdr_after, mut start, mut stop) = (None, None, None, None);
+    if reference.pixels.iter().any(|&p| crate::luminance(p) > 0.0) {
+        let h = crate::hdr_flip(test, reference)?;
+        if let Some(t) = &flux_normalized {
+            let after =
+                crate::hdr_flip_with_exposures(t, reference, h.start_exposure, h.stop_exposure)?;
+            hdr_after = Some(after.mean);
+        }
+        hdr = Some(h.mean);
+        start = Some(f64::from(h.start_exposure));
+        stop = Some(f64::from(h.stop_exposure));
+    }
     Ok(Errors {
         rmse: rmse(test, reference)?,
         rel_mse: rel_mse(test, reference, REL_MSE_EPS)?,
@@ -175,6 +237,13 @@ pub fn all_errors(
         rmse_after_best_scale,
         rel_mse_after_best_scale: Some(rel_mse(&rescaled, reference, REL_MSE_EPS)?),
         flip_after_best_scale: Some(crate::flip(&rescaled, reference, tone)?),
+        flux_ratio,
+        flux_ratio_image,
+        rel_mse_after_flux,
+        hdr_flip: hdr,
+        hdr_flip_after_flux: hdr_after,
+        hdr_flip_start_exposure: start,
+        hdr_flip_stop_exposure: stop,
     })
 }
 

@@ -39,7 +39,7 @@ pub fn flip_map(
 }
 
 /// LDR-FLIP map of two 8-bit sRGB images of equal size.
-fn flip_ldr(test: &Rgb8Image, reference: &Rgb8Image) -> Vec<f32> {
+pub(crate) fn flip_ldr(test: &Rgb8Image, reference: &Rgb8Image) -> Vec<f32> {
     let r =
         nv_flip::FlipImageRgb8::with_data(reference.width, reference.height, &reference.as_bytes());
     let t = nv_flip::FlipImageRgb8::with_data(test.width, test.height, &test.as_bytes());

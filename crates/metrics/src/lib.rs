@@ -26,7 +26,9 @@ mod colormap;
 mod error;
 mod error_metrics;
 mod flip;
+mod flux;
 mod font;
+mod hdr_flip;
 mod heatmap;
 mod image;
 mod io;
@@ -39,7 +41,13 @@ pub use crate::error_metrics::{
     Errors, REL_MSE_EPS, all_errors, best_scale, check_pair, psnr, rel_mse, rmse,
 };
 pub use crate::flip::{FLIP_PIXELS_PER_DEGREE, flip, flip_map};
+pub use crate::flux::{
+    CAUSTIC_REGION_FRACTION, CAUSTIC_REGION_PERCENTILE, caustic_region, flux_ratio,
+};
 pub use crate::font::{GLYPH_H, draw_text, draw_text_vertical, text_width};
+pub use crate::hdr_flip::{
+    HDR_FLIP_ACES, HdrFlip, hdr_flip, hdr_flip_exposures, hdr_flip_with_exposures,
+};
 pub use crate::heatmap::{
     COLOR_BAR_WIDTH, HeatmapOptions, Histogram, HistogramBucket, MIN_MAP_HEIGHT, PANEL_BACKGROUND,
     ZERO_COUNT_COLOUR, error_map, error_map_with_max, error_quantile, format_count, format_value,
