@@ -176,7 +176,8 @@ fn run_row(
         reference: None,
         out: out.clone(),
         adapter: None,
-        exposure: 2.0,
+        exposure: Some(2.0),
+        score_grid: caustics::run::DEFAULT_SCORE_GRID,
         references: caustics::references::DEFAULT_ROOT.into(),
     };
     eprintln!("== {experiment} {label}: {method} {}", params.join(" "));

@@ -158,7 +158,8 @@ fn run_at(
         reference: None,
         out,
         adapter: None,
-        exposure: 2.0,
+        exposure: Some(2.0),
+        score_grid: caustics::run::DEFAULT_SCORE_GRID,
         references: caustics::references::DEFAULT_ROOT.into(),
     };
     eprintln!("== {config}: {method} {}", params.join(" "));

@@ -207,7 +207,7 @@ pub fn collect_results(root: &Path) -> Result<BTreeMap<String, RunResult>> {
             } else if path.file_name().is_some_and(|n| n == "result.json") {
                 let text = std::fs::read_to_string(&path)
                     .with_context(|| format!("reading {}", path.display()))?;
-                let r: RunResult = serde_json::from_str(&text)
+                let r = RunResult::from_json(&text)
                     .with_context(|| format!("{}: not a result.json", path.display()))?;
                 let rel = path
                     .parent()

@@ -88,9 +88,14 @@ pub struct ExperimentFile {
     /// Warm-up frames per run.
     #[serde(default = "default_warmup")]
     pub warmup: u32,
-    /// Exposure of the tone-mapped images and of FLIP.
-    #[serde(default = "default_exposure")]
-    pub exposure: f32,
+    /// Exposure of the tone-mapped images and of LDR FLIP. Absent: each scene's
+    /// reference sets it (its 99th-percentile luminance maps to white).
+    #[serde(default)]
+    pub exposure: Option<f32>,
+    /// N of the N×N sub-pixel offsets of each run's scoring frame (`caustics run
+    /// --score-grid`).
+    #[serde(default = "default_score_grid")]
+    pub score_grid: u32,
     /// Photon budget of references that `reproduce` renders when the cache has none for
     /// a scene at the experiment's resolution. Absent: such runs are made without errors
     /// and the summary says so.
@@ -109,8 +114,8 @@ fn default_frames() -> u32 {
 fn default_warmup() -> u32 {
     2
 }
-fn default_exposure() -> f32 {
-    2.0
+fn default_score_grid() -> u32 {
+    crate::run::DEFAULT_SCORE_GRID
 }
 
 /// Image size: a scale of each scene's camera, or an absolute size.
@@ -458,10 +463,20 @@ impl Experiment {
             ));
         }
         check_frames(&def.frames, def.warmup, "", &invalid)?;
-        if !(def.exposure.is_finite() && def.exposure > 0.0) {
+        if let Some(e) = def.exposure.filter(|e| !(e.is_finite() && *e > 0.0)) {
             return Err(invalid(
                 "exposure",
-                format!("expected a positive number, got {}", def.exposure),
+                format!("expected a positive number, got {e}"),
+            ));
+        }
+        let max_grid = caustics_gpu::scoring::MAX_SCORE_GRID;
+        if def.score_grid == 0 || def.score_grid > max_grid {
+            return Err(invalid(
+                "score_grid",
+                format!(
+                    "expected an integer in 1..={max_grid}, got {}",
+                    def.score_grid
+                ),
             ));
         }
         check_resolution(&def.resolution, "resolution", &invalid)?;

@@ -329,6 +329,7 @@ fn run_one(e: &Experiment, spec: &RunSpec, args: &ReproduceArgs, out: &Path) -> 
         out: out.join(&rel),
         adapter: args.adapter.clone(),
         exposure: e.def.exposure,
+        score_grid: e.def.score_grid,
         references: args.references.clone(),
     };
     let status = |status: &str, dir: Option<String>, reason: Option<String>| RunStatus {

@@ -8,7 +8,13 @@ use crate::machine::{Build, Machine};
 use crate::stats::Summary;
 
 /// Bumped whenever a field changes meaning or is removed.
-pub const SCHEMA_VERSION: u32 = 1;
+///
+/// - 1: `errors` were scored on the timed frame, one sample at each pixel centre.
+/// - 2: `errors` are scored on the pixel-averaged scoring frame ([`ScoringInfo`]); the
+///   timed frame's own errors moved to `errors_1spp`. [`RunResult::from_json`] reads a
+///   version-1 file by moving its `errors` there, so old and new are never compared as
+///   if they meant the same.
+pub const SCHEMA_VERSION: u32 = 2;
 
 /// The whole result of one run.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -39,8 +45,42 @@ pub struct RunResult {
     pub images: BTreeMap<String, String>,
     /// The tone mapping of `composite.png` and of FLIP.
     pub tone_map: ToneMapInfo,
-    /// Errors against the reference, when one was given.
+    /// How the scored images were made (absent in version-1 files: scored at 1 spp).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scoring: Option<ScoringInfo>,
+    /// Errors of the pixel-averaged scoring frame against the reference (the reference
+    /// is a pixel-area average too), when a reference was given.
     pub errors: Option<ErrorReport>,
+    /// Errors of the timed frame itself (one sample at each pixel centre, what the
+    /// method shows in real time). `errors_1spp − errors` is the camera-aliasing share.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub errors_1spp: Option<ErrorReport>,
+}
+
+impl RunResult {
+    /// Parses a `result.json` of any schema version this build knows, upgraded to the
+    /// current meaning of every field (see [`SCHEMA_VERSION`]).
+    pub fn from_json(text: &str) -> Result<Self, serde_json::Error> {
+        let mut r: Self = serde_json::from_str(text)?;
+        if r.schema_version < 2 && r.errors_1spp.is_none() {
+            r.errors_1spp = r.errors.take();
+        }
+        Ok(r)
+    }
+}
+
+/// The scoring frame (DESIGN "Measuring honestly": scoring is at the reference's
+/// footprint).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ScoringInfo {
+    /// N of the N×N sub-pixel camera offsets (stratum centres) averaged per pixel.
+    pub grid: u32,
+    /// N², the samples per pixel of the scored images.
+    pub samples_per_pixel: u32,
+    /// CPU wall time of all scoring sub-frames together (ms): record, submit, wait and
+    /// accumulate, outside the timed frames.
+    pub wall_ms: f64,
 }
 
 /// The scene as run.
@@ -156,12 +196,20 @@ pub struct Memory {
     pub base: u64,
 }
 
-/// Tone mapping used for PNGs and FLIP.
+/// Tone mapping used for PNGs and LDR FLIP.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ToneMapInfo {
     /// Linear radiance is multiplied by this, clamped to [0, 1], then sRGB-encoded.
     pub exposure_scale: f32,
+    /// Where the exposure came from: "--exposure", "reference p99" (the reference
+    /// surface caustic's 99th-percentile luminance maps to 1), or "image p99" (no
+    /// reference: the run's own composite). Absent in files before it existed.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub source: Option<String>,
+    /// Exposure of the volume caustic's LDR FLIP (its reference's 99th percentile).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub volume_exposure_scale: Option<f32>,
 }
 
 /// Errors of the caustic images against a reference.

@@ -14,13 +14,16 @@ use caustics_scene::Scene;
 
 use crate::result::{
     ErrorReport, Fragments, FrameCounts, Memory, MethodRun, PassFragments, PassTiming, RunResult,
-    SCHEMA_VERSION, SceneInfo, Timing, ToneMapInfo,
+    SCHEMA_VERSION, SceneInfo, ScoringInfo, Timing, ToneMapInfo,
 };
 use crate::stats::summarize;
 use crate::{machine, registry};
 
 /// Exit code of a run skipped because the method cannot render the scene.
 pub const EXIT_SKIPPED: i32 = 3;
+
+/// Default N of the N×N scoring grid (16 samples per pixel, DESIGN "Measuring honestly").
+pub const DEFAULT_SCORE_GRID: u32 = 4;
 
 /// Everything `caustics run` takes (also its command-line flags).
 #[derive(Clone, Debug, clap::Args)]
@@ -50,9 +53,16 @@ pub struct RunOptions {
     /// first hardware adapter, else lavapipe).
     #[arg(long)]
     pub adapter: Option<String>,
-    /// Exposure scale of the tone-mapped PNGs and of FLIP: linear × scale, clamp, sRGB.
-    #[arg(long, default_value_t = 2.0)]
-    pub exposure: f32,
+    /// Exposure scale of the tone-mapped PNGs and of LDR FLIP: linear × scale, clamp,
+    /// sRGB. Default: the reference surface caustic's 99th-percentile luminance maps to
+    /// white (the same for every method on a scene), else the run's own composite's.
+    #[arg(long)]
+    pub exposure: Option<f32>,
+    /// N of the N×N sub-pixel camera offsets averaged in the scoring frame, after the
+    /// timed frames (the reference is a pixel-area average; 1 scores the pixel centre,
+    /// as the timed frames sample it). Timed frames stay one sample per pixel.
+    #[arg(long, default_value_t = DEFAULT_SCORE_GRID, value_name = "N")]
+    pub score_grid: u32,
     /// Reference cache root; without --reference, a cached reference of this scene
     /// (same content hash and resolution) is used for errors.
     #[arg(long, value_name = "DIR", default_value = crate::references::DEFAULT_ROOT)]
@@ -110,8 +120,15 @@ fn validate_options(o: &RunOptions) -> Result<()> {
             o.warmup
         );
     }
-    if !(o.exposure.is_finite() && o.exposure > 0.0) {
-        bail!("--exposure: expected a positive number, got {}", o.exposure);
+    if let Some(e) = o.exposure.filter(|e| !(e.is_finite() && *e > 0.0)) {
+        bail!("--exposure: expected a positive number, got {e}");
+    }
+    let max_grid = caustics_gpu::scoring::MAX_SCORE_GRID;
+    if o.score_grid == 0 || o.score_grid > max_grid {
+        bail!(
+            "--score-grid: expected an integer in 1..={max_grid} (N of N×N sub-pixel offsets), got {}",
+            o.score_grid
+        );
     }
     if let Some(r) = o.reference.as_ref().filter(|r| !r.is_file()) {
         bail!("--reference {}: no such file", r.display());
@@ -183,20 +200,43 @@ pub fn run_scene(o: &RunOptions, scene: Scene) -> Result<RunOutcome> {
         );
     }
     let fill = renderer.read_fill_counts(&ctx)?;
-    let read = |t: &caustics_gpu::textures::Target, what: &str| -> Result<HdrImage> {
-        let rgba = caustics_gpu::readback::read_rgba32f(&ctx, &t.texture, what)?;
-        Ok(HdrImage::from_rgba_f32(
-            t.texture.width(),
-            t.texture.height(),
-            &rgba,
-        )?)
+    let (w, h) = (scene.camera.width, scene.camera.height);
+    let image = |rgba: &[f32], what: &str| -> Result<HdrImage> {
+        let img = HdrImage::from_rgba_f32(w, h, rgba)?;
+        img.check_finite(what)?;
+        Ok(img)
     };
+    // The timed frame's image (the count frame renders the same image as every timed
+    // frame): one sample at each pixel centre.
     let targets = renderer.targets();
-    let direct = read(&targets.direct, "direct image")?;
-    let surface = read(&targets.surface, "surface caustic image")?;
-    let volume = read(&targets.volume, "volume caustic image")?;
-    surface.check_finite("surface caustic image")?;
-    volume.check_finite("volume caustic image")?;
+    let read = |t: &caustics_gpu::textures::Target, what: &str| -> Result<HdrImage> {
+        image(
+            &caustics_gpu::readback::read_rgba32f(&ctx, &t.texture, what)?,
+            what,
+        )
+    };
+    let surface_1spp = read(&targets.surface, "surface caustic image (timed frame)")?;
+    let volume_1spp = read(&targets.volume, "volume caustic image (timed frame)")?;
+
+    // The scoring frame: N×N sub-pixel offsets averaged, outside the timed frames.
+    let score_started = std::time::Instant::now();
+    let mut accumulator = caustics_gpu::ScoreAccumulator::new(&ctx, &renderer)?;
+    let scored = caustics_method::render_scoring_frame(
+        &ctx,
+        &renderer,
+        method.as_mut(),
+        &mut accumulator,
+        o.score_grid,
+    )?;
+    let scoring = ScoringInfo {
+        grid: o.score_grid,
+        samples_per_pixel: scored.frames,
+        wall_ms: score_started.elapsed().as_secs_f64() * 1e3,
+    };
+    let direct = image(&scored.direct, "direct image (scoring frame)")?;
+    let surface = image(&scored.surface, "surface caustic image (scoring frame)")?;
+    let volume = image(&scored.volume, "volume caustic image (scoring frame)")?;
+    drop(accumulator);
 
     let measured = &samples[o.warmup as usize..(o.warmup + o.frames) as usize];
     let count_frame = samples.last().context("no count frame recorded")?;
@@ -205,9 +245,22 @@ pub fn run_scene(o: &RunOptions, scene: Scene) -> Result<RunOutcome> {
 
     let dir = o.out.join(&scene.name).join(&o.method);
     std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
-    let tone = ToneMap {
-        exposure_scale: o.exposure,
+    let composite = direct.add(&surface)?.add(&volume)?;
+    let (tone, tone_source) = match (o.exposure, &reference) {
+        (Some(e), _) => (ToneMap::new(e), "--exposure"),
+        (None, Some(r)) => (
+            ToneMap::fit_percentile(&r.surface, EXPOSURE_PERCENTILE),
+            "reference p99",
+        ),
+        (None, None) => (
+            ToneMap::fit_percentile(&composite, EXPOSURE_PERCENTILE),
+            "image p99",
+        ),
     };
+    let volume_tone = reference
+        .as_ref()
+        .and_then(|r| r.volume.as_ref())
+        .map(|v| ToneMap::fit_percentile(v, EXPOSURE_PERCENTILE));
     let mut images = BTreeMap::new();
     let mut write_exr = |name: &str, img: &HdrImage| -> Result<()> {
         caustics_metrics::write_exr(&dir.join(name), img)?;
@@ -215,44 +268,51 @@ pub fn run_scene(o: &RunOptions, scene: Scene) -> Result<RunOutcome> {
         Ok(())
     };
     write_exr("surface.exr", &surface)?;
+    write_exr("surface_1spp.exr", &surface_1spp)?;
     if info.capabilities.volume {
         write_exr("volume.exr", &volume)?;
+        write_exr("volume_1spp.exr", &volume_1spp)?;
     }
     write_exr("direct.exr", &direct)?;
-    let composite = direct.add(&surface)?.add(&volume)?;
     caustics_metrics::write_png(&dir.join("composite.png"), &tone.apply(&composite))?;
     images.insert("composite".into(), "composite.png".into());
-    let (w, h) = (scene.camera.width, scene.camera.height);
     if fragments.is_some() || fill.iter().any(|&c| c > 0) {
         let heat = caustics_metrics::heatmap(&fill, w, h, &format!("{} fragments/px", o.method))?;
         caustics_metrics::write_png(&dir.join("fill_heatmap.png"), &heat)?;
         images.insert("fill_heatmap".into(), "fill_heatmap.png".into());
     }
-    let errors = match &reference {
+    let (errors, errors_1spp) = match &reference {
         Some(r) => {
-            let surface_errors = caustics_metrics::all_errors(&surface, &r.surface, &tone)?;
-            // Scale topped at the 99th percentile: cusps would otherwise black out the rest.
-            let top = caustics_metrics::error_quantile(&surface, &r.surface, 0.99)?;
-            let map = caustics_metrics::error_map_with_max(
-                &surface,
-                &r.surface,
-                (top > 0.0).then_some(top),
-            )?;
-            caustics_metrics::write_png(&dir.join("error.png"), &map)?;
-            images.insert("error".into(), "error.png".into());
-            let volume_errors = match &r.volume {
-                Some(v) => Some(caustics_metrics::all_errors(&volume, v, &tone)?),
-                None => None,
+            let noise = reference_noise(&r.path)?;
+            let score = |surface: &HdrImage, volume: &HdrImage| -> Result<ErrorReport> {
+                let volume_errors = match (&r.volume, &volume_tone) {
+                    (Some(v), Some(vt)) => Some(caustics_metrics::all_errors(volume, v, vt)?),
+                    _ => None,
+                };
+                Ok(ErrorReport {
+                    reference: r.path.display().to_string(),
+                    reference_source: r.source.to_owned(),
+                    surface: caustics_metrics::all_errors(surface, &r.surface, &tone)?,
+                    volume: volume_errors,
+                    reference_noise_rms: noise,
+                })
             };
-            Some(ErrorReport {
-                reference: r.path.display().to_string(),
-                reference_source: r.source.to_owned(),
-                surface: surface_errors,
-                volume: volume_errors,
-                reference_noise_rms: reference_noise(&r.path)?,
-            })
+            write_error_maps(&dir, &surface, &r.surface, "error", &mut images)?;
+            if let Some(v) = r.volume.as_ref().filter(|_| info.capabilities.volume) {
+                write_error_maps(&dir, &volume, v, "volume_error", &mut images)?;
+            }
+            (
+                Some(score(&surface, &volume)?),
+                Some(score(&surface_1spp, &volume_1spp)?),
+            )
         }
-        None => None,
+        None => {
+            eprintln!(
+                "note: no reference for {} at {w}x{h}: no errors (render one with `caustics reference --scene {}`)",
+                scene.name, o.scene
+            );
+            (None, None)
+        }
     };
 
     let result = RunResult {
@@ -284,9 +344,13 @@ pub fn run_scene(o: &RunOptions, scene: Scene) -> Result<RunOutcome> {
         },
         images,
         tone_map: ToneMapInfo {
-            exposure_scale: o.exposure,
+            exposure_scale: tone.exposure_scale,
+            source: Some(tone_source.to_owned()),
+            volume_exposure_scale: volume_tone.map(|t| t.exposure_scale),
         },
+        scoring: Some(scoring),
         errors,
+        errors_1spp,
     };
     let json = serde_json::to_vec_pretty(&result)?;
     caustics_metrics::atomic_write(&dir.join("result.json"), &json)?;
@@ -294,6 +358,26 @@ pub fn run_scene(o: &RunOptions, scene: Scene) -> Result<RunOutcome> {
         dir,
         result: Box::new(result),
     })
+}
+
+/// Percentile of the reference's luminance that the default exposure maps to white.
+const EXPOSURE_PERCENTILE: f64 = 0.99;
+
+/// The error maps of a scored image against its reference, as `<stem>.png` (the
+/// magnitude, topped at its 99th percentile: cusps would otherwise black out the rest).
+fn write_error_maps(
+    dir: &Path,
+    test: &HdrImage,
+    reference: &HdrImage,
+    stem: &str,
+    images: &mut BTreeMap<String, String>,
+) -> Result<()> {
+    let top = caustics_metrics::error_quantile(test, reference, 0.99)?;
+    let map = caustics_metrics::error_map_with_max(test, reference, (top > 0.0).then_some(top))?;
+    let name = format!("{stem}.png");
+    caustics_metrics::write_png(&dir.join(&name), &map)?;
+    images.insert(stem.to_owned(), name);
+    Ok(())
 }
 
 /// The reference images a run scores against.

@@ -154,7 +154,7 @@ impl Row {
 pub fn read_result(dir: &Path) -> Result<RunResult> {
     let p = dir.join("result.json");
     let text = std::fs::read_to_string(&p).with_context(|| format!("reading {}", p.display()))?;
-    serde_json::from_str(&text).with_context(|| format!("{}: not a result.json", p.display()))
+    RunResult::from_json(&text).with_context(|| format!("{}: not a result.json", p.display()))
 }
 
 /// Builds the summary of `out` from its manifest and result files.

@@ -254,6 +254,13 @@ impl GBuffer {
     pub fn layers(&self) -> u32 {
         self.views.len() as u32
     }
+
+    /// Replaces the view uniform of `layer` (staged: takes effect at the next submit).
+    pub(crate) fn write_view(&self, queue: &wgpu::Queue, layer: usize, view: &ViewUniform) {
+        if let Some((buffer, _)) = self.views.get(layer) {
+            queue.write_buffer(buffer, 0, bytemuck::bytes_of(view));
+        }
+    }
 }
 
 /// Depth only, from a light's view (one layer per face): the base renderer's shadow

@@ -29,6 +29,7 @@ pub mod profiling;
 pub mod readback;
 pub mod renderer;
 pub mod scene_upload;
+pub mod scoring;
 pub mod shader;
 pub mod textures;
 
@@ -42,4 +43,5 @@ pub use impostor::{DistanceImpostor, ImpostorAtlas, ImpostorPass};
 pub use profiling::{FrameMode, FrameSample, PassProfiler, PassSample, PassStatistics};
 pub use renderer::{CountedPipeline, Renderer, RendererOptions, fill_constants, pass_desc};
 pub use scene_upload::GpuScene;
+pub use scoring::{ScoreAccumulator, ScoredImages, subpixel_offsets};
 pub use wgpu;

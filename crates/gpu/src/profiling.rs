@@ -33,6 +33,9 @@ pub enum FrameMode {
     Timed,
     /// Pipeline statistics and per-pixel fill counting on; no timestamps.
     Count,
+    /// A scoring sub-frame (crates/gpu/src/scoring.rs): nothing measured, nothing
+    /// counted; only its image is used.
+    Score,
 }
 
 /// Pipeline statistics of one pass.
@@ -133,6 +136,22 @@ impl PassProfiler {
             ts_results,
             stats_results,
             period_ns: ctx.queue.get_timestamp_period() as f64,
+            max_frames,
+            frames: Vec::new(),
+            open: None,
+        }
+    }
+
+    /// A profiler that takes no queries at all, for [`FrameMode::Score`] frames: passes
+    /// are still opened by name (so methods record exactly as in measured frames), but
+    /// no query set or results buffer is allocated.
+    pub fn unmeasured(max_frames: u32) -> Self {
+        Self {
+            timestamps: None,
+            statistics: None,
+            ts_results: None,
+            stats_results: None,
+            period_ns: 1.0,
             max_frames,
             frames: Vec::new(),
             open: None,

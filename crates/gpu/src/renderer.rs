@@ -3,11 +3,12 @@
 //! fill-rate counter and the group-0 bind group that method passes share.
 
 use bytemuck::{Pod, Zeroable};
+use glam::{Mat4, Vec3};
 use wgpu::util::DeviceExt;
 
 use crate::binding::{entry, storage_entry};
 use crate::frame::Frame;
-use crate::gbuffer::{GBuffer, GBufferPass, LightProjection, LightView, ShadowMap};
+use crate::gbuffer::{GBuffer, GBufferPass, LightProjection, LightView, ShadowMap, ViewUniform};
 use crate::profiling::{FrameMode, PassProfiler};
 use crate::scene_upload::{GpuLight, GpuScene, gpu_light};
 use crate::shader;
@@ -103,7 +104,10 @@ pub struct Renderer {
     direct_pipeline: wgpu::RenderPipeline,
     targets: RadianceTargets,
     frame_uniforms: FrameUniforms,
-    _frame_buffer: wgpu::Buffer,
+    frame_buffer: wgpu::Buffer,
+    /// Camera world → view and view → clip, unshifted (see [`Renderer::set_subpixel_offset`]).
+    camera_view: Mat4,
+    camera_projection: Mat4,
     frame_layout: wgpu::BindGroupLayout,
     frame_bind: wgpu::BindGroup,
     fill_counts: wgpu::Buffer,
@@ -148,6 +152,7 @@ impl Renderer {
 
         let gbuffer_pass = GBufferPass::new(device);
         let camera_gbuffer = gbuffer_pass.camera_gbuffer(device, cam, near, far);
+        let (camera_view, camera_projection) = (cam.view(), cam.projection(near, far));
         let targets = RadianceTargets::new(device, w, h);
 
         // Group 0 of method passes.
@@ -180,7 +185,7 @@ impl Renderer {
             ],
         });
         let frame_uniforms = FrameUniforms {
-            view_proj: (cam.projection(near, far) * cam.view()).to_cols_array_2d(),
+            view_proj: (camera_projection * camera_view).to_cols_array_2d(),
             eye: cam.eye.extend(cam.fov_y_deg.to_radians()).to_array(),
             forward: cam.forward().extend(0.0).to_array(),
             resolution: [w as f32, h as f32, 1.0 / w as f32, 1.0 / h as f32],
@@ -194,7 +199,7 @@ impl Renderer {
         let frame_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("frame uniforms"),
             contents: bytemuck::bytes_of(&frame_uniforms),
-            usage: wgpu::BufferUsages::UNIFORM,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         });
         let fill_counts = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("fill counts"),
@@ -412,7 +417,9 @@ impl Renderer {
             direct_pipeline,
             targets,
             frame_uniforms,
-            _frame_buffer: frame_buffer,
+            frame_buffer,
+            camera_view,
+            camera_projection,
             frame_layout,
             frame_bind,
             fill_counts,
@@ -446,9 +453,45 @@ impl Renderer {
         &self.targets
     }
 
-    /// Camera, resolution and counts as uploaded.
+    /// Camera, resolution and counts as uploaded (the unshifted camera).
     pub fn frame_uniforms(&self) -> &FrameUniforms {
         &self.frame_uniforms
+    }
+
+    /// Shifts the camera by `offset_px` pixels (x right, y down; `[0, 0]` is the pixel
+    /// centre) for the frames submitted from now on, in the camera G-buffer's view and
+    /// in group 0's `view_proj`, so the base passes and every method pass see the same
+    /// camera. A translation after the projection moves the whole image by a sub-pixel
+    /// amount and leaves depth and the eye unchanged: the pixel centre then samples the
+    /// scene where the continuous pixel position `(i + 0.5 + dx, j + 0.5 + dy)` of the
+    /// unshifted camera lies (DESIGN "Camera"). Two uniform writes, no allocation.
+    pub fn set_subpixel_offset(&self, queue: &wgpu::Queue, offset_px: [f32; 2]) {
+        let [w, h] = [
+            self.frame_uniforms.resolution[0],
+            self.frame_uniforms.resolution[1],
+        ];
+        // NDC x grows right and y up; a content shift of −d pixels is +2d/size in NDC
+        // along x and −2d/size along y (row 0 at the top).
+        let shift = Mat4::from_translation(Vec3::new(
+            -2.0 * offset_px[0] / w,
+            2.0 * offset_px[1] / h,
+            0.0,
+        ));
+        let view_proj = shift * self.camera_projection * self.camera_view;
+        let uniforms = FrameUniforms {
+            view_proj: view_proj.to_cols_array_2d(),
+            ..self.frame_uniforms
+        };
+        queue.write_buffer(&self.frame_buffer, 0, bytemuck::bytes_of(&uniforms));
+        let eye = self.scene.scene.camera.eye;
+        self.camera_gbuffer.write_view(
+            queue,
+            0,
+            &ViewUniform {
+                view_proj: view_proj.to_cols_array_2d(),
+                eye: eye.extend(1.0).to_array(),
+            },
+        );
     }
 
     /// Layout of group 0 (frame.wgsl), for method pipeline layouts.

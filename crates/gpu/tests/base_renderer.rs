@@ -277,3 +277,46 @@ fn point_light_direct_light_is_inverse_square_and_shadowed_by_the_ring_across_cu
         "lit {lit}, shadowed {shadowed}"
     );
 }
+
+/// A sub-pixel camera offset (the scoring frame's) moves the G-buffer's samples to
+/// `(i + 0.5 + dx, j + 0.5 + dy)` of the unshifted camera, in the direction the offset
+/// names (x right, y down), and back to the pixel centre at `[0, 0]`.
+#[test]
+fn subpixel_offset_shifts_the_camera_gbuffer_samples() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let path = small_copy(tmp.path(), "sphere_on_plane", 64, 48);
+    let (ctx, renderer) = render(&path);
+    let cam = renderer.scene().scene.camera.clone();
+    let floor_hit = |px: f32, py: f32| {
+        let (o, d) = cam.ray_through_pixel(px, py);
+        o + (-o.y / d.y) * d
+    };
+    for offset in [[0.375f32, -0.125], [-0.25, 0.375], [0.0, 0.0]] {
+        renderer.set_subpixel_offset(&ctx.queue, offset);
+        let mut profiler = PassProfiler::unmeasured(1);
+        let frame = renderer
+            .begin_frame(&mut profiler, FrameMode::Score)
+            .expect("frame");
+        frame.submit(&ctx).expect("submit");
+        let gb = renderer.camera_gbuffer();
+        let pos = read_rgba32f(&ctx, &gb.position.texture, "position").expect("position");
+        let id = ids(&ctx, &gb.ids.texture, 0);
+        let mut checked = 0;
+        for (x, y) in [(5u32, 44u32), (58, 40), (32, 46), (10, 30)] {
+            let i = (y * cam.width + x) as usize;
+            if id[i][0] != 1 || pos[4 * i + 3] < 0.5 {
+                continue; // not the floor
+            }
+            let p = Vec3::new(pos[4 * i], pos[4 * i + 1], pos[4 * i + 2]);
+            let shifted = floor_hit(x as f32 + 0.5 + offset[0], y as f32 + 0.5 + offset[1]);
+            let centre = floor_hit(x as f32 + 0.5, y as f32 + 0.5);
+            let moved = (shifted - centre).length();
+            assert!(
+                (p - shifted).length() < 0.05 * moved.max(1e-2),
+                "offset {offset:?}, pixel ({x},{y}): G-buffer {p}, expected {shifted} (centre {centre})"
+            );
+            checked += 1;
+        }
+        assert!(checked >= 3, "too few floor pixels checked ({checked})");
+    }
+}

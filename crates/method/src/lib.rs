@@ -10,7 +10,10 @@
 
 use std::collections::BTreeMap;
 
-use caustics_gpu::{Frame, GpuContext, GpuError, Renderer};
+use caustics_gpu::{
+    Frame, FrameMode, GpuContext, GpuError, PassProfiler, Renderer, ScoreAccumulator, ScoredImages,
+    subpixel_offsets,
+};
 use caustics_scene::Scene;
 use serde::de::DeserializeOwned;
 
@@ -249,6 +252,37 @@ pub fn param_specs<P: serde::Serialize + Default>(
             ParamSpec { name, default, doc }
         })
         .collect()
+}
+
+/// Renders the scoring frame of `method` (DESIGN "Measuring honestly"): the frame
+/// again at each of the `grid × grid` sub-pixel camera offsets of
+/// [`subpixel_offsets`], the three radiance targets averaged on the GPU. Each
+/// sub-frame is a whole frame (G-buffer, base passes, the method's passes), so a method
+/// must give the same image for the same offset whatever it rendered before; nothing
+/// is timed or counted. `accumulator` is allocated once per run; the camera is back at
+/// the pixel centre when this returns.
+pub fn render_scoring_frame(
+    ctx: &GpuContext,
+    renderer: &Renderer,
+    method: &mut dyn CausticsMethod,
+    accumulator: &mut ScoreAccumulator,
+    grid: u32,
+) -> Result<ScoredImages, MethodError> {
+    let offsets = subpixel_offsets(grid);
+    let mut profiler = PassProfiler::unmeasured(offsets.len() as u32);
+    let rendered = (|| {
+        for offset in &offsets {
+            renderer.set_subpixel_offset(&ctx.queue, *offset);
+            let mut frame = renderer.begin_frame(&mut profiler, FrameMode::Score)?;
+            method.record(&mut frame)?;
+            accumulator.record(&mut frame)?;
+            frame.submit(ctx)?;
+        }
+        Ok::<_, MethodError>(())
+    })();
+    renderer.set_subpixel_offset(&ctx.queue, [0.0, 0.0]);
+    rendered?;
+    Ok(accumulator.read_mean(ctx)?)
 }
 
 #[cfg(test)]

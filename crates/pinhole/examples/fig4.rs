@@ -49,7 +49,8 @@ fn run_one(scene: &str, config: &str, params: &[String]) -> Result<Row> {
         reference: None,
         out,
         adapter: None,
-        exposure: EXPOSURE,
+        exposure: Some(EXPOSURE),
+        score_grid: caustics::run::DEFAULT_SCORE_GRID,
         references: caustics::references::DEFAULT_ROOT.into(),
     };
     eprintln!("== {config}: {}", params.join(" "));

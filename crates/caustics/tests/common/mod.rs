@@ -37,7 +37,8 @@ pub(crate) fn run_options(scene: &Path, out: &Path, method: &str, params: &[&str
         reference: None,
         out: out.to_owned(),
         adapter: None,
-        exposure: 2.0,
+        exposure: Some(2.0),
+        score_grid: caustics::run::DEFAULT_SCORE_GRID,
         references: out.join("no-reference-cache"),
     }
 }
