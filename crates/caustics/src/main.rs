@@ -149,16 +149,32 @@ fn print_summary(dir: &std::path::Path, r: &caustics::result::RunResult) {
     for (k, v) in &r.counters {
         println!("  {k}: {v}");
     }
-    if let Some(e) = &r.errors {
+    if let Some(s) = &r.scoring {
         println!(
-            "  errors: RMSE {:.4e}, relMSE {:.4e}, PSNR {:.2} dB, SSIM {:.4}, FLIP {:.4} (best scale {:.3})",
-            e.surface.rmse,
-            e.surface.rel_mse,
-            e.surface.psnr_db,
-            e.surface.ssim,
-            e.surface.flip,
-            e.surface.best_scale
+            "  scoring frame: {}x{} sub-pixel offsets ({} spp), {:.0} ms wall, not timed",
+            s.grid, s.grid, s.samples_per_pixel, s.wall_ms
         );
+    }
+    let opt = |v: Option<f64>, digits: usize| match v {
+        Some(v) => format!("{v:.digits$}"),
+        None => "-".to_owned(),
+    };
+    for (label, report) in [("", &r.errors), (" (1 spp)", &r.errors_1spp)] {
+        let Some(report) = report else { continue };
+        let images = std::iter::once(("surface", &report.surface))
+            .chain(report.volume.as_ref().map(|v| ("volume", v)));
+        for (image, e) in images {
+            println!(
+                "  {image} errors{label}: flux ratio {} (image {}), relMSE {:.4e} (after flux {}), HDR-FLIP {}, LDR-FLIP {:.4}, RMSE {:.4e}",
+                opt(e.flux_ratio, 3),
+                opt(e.flux_ratio_image, 3),
+                e.rel_mse,
+                opt(e.rel_mse_after_flux, 4),
+                opt(e.hdr_flip, 4),
+                e.flip,
+                e.rmse,
+            );
+        }
     }
     println!("  written to {}", dir.display());
 }
