@@ -19,6 +19,12 @@
 //! # Ok::<(), caustics_metrics::MetricsError>(())
 //! ```
 //!
+//! Energy before shape: [`flux_ratio`] over the reference's [`caustic_region`] says whether
+//! the light is all there; relMSE and [`hdr_flip`] (exposure-bracketed, Andersson et al.
+//! 2021) after dividing by the whole-image flux ratio say whether it is in the right place
+//! (all in [`Errors`]). [`signed_error_map`] and [`relative_error_map`] draw the error with
+//! its sign and unit; heatmaps and maps of one figure take one shared scale.
+//!
 //! Files are written atomically ([`atomic_write`]): readers never see a partial EXR, PNG
 //! or result file.
 
