@@ -363,8 +363,10 @@ pub fn run_scene(o: &RunOptions, scene: Scene) -> Result<RunOutcome> {
 /// Percentile of the reference's luminance that the default exposure maps to white.
 const EXPOSURE_PERCENTILE: f64 = 0.99;
 
-/// The error maps of a scored image against its reference, as `<stem>.png` (the
-/// magnitude, topped at its 99th percentile: cusps would otherwise black out the rest).
+/// The error maps of a scored image against its reference: `<stem>.png`, signed
+/// (method − reference luminance, W·m⁻²·sr⁻¹, blue too dark, red too bright) and
+/// `<stem>_relative.png` ((t − r)/r, ±100 %). The signed map's range is the reference's
+/// 99th-percentile luminance, so every method's map of one scene shares one scale.
 fn write_error_maps(
     dir: &Path,
     test: &HdrImage,
@@ -372,11 +374,22 @@ fn write_error_maps(
     stem: &str,
     images: &mut BTreeMap<String, String>,
 ) -> Result<()> {
-    let top = caustics_metrics::error_quantile(test, reference, 0.99)?;
-    let map = caustics_metrics::error_map_with_max(test, reference, (top > 0.0).then_some(top))?;
-    let name = format!("{stem}.png");
-    caustics_metrics::write_png(&dir.join(&name), &map)?;
-    images.insert(stem.to_owned(), name);
+    let scale = 1.0 / ToneMap::fit_percentile(reference, EXPOSURE_PERCENTILE).exposure_scale;
+    let maps = [
+        (
+            stem.to_owned(),
+            caustics_metrics::signed_error_map(test, reference, Some(scale))?,
+        ),
+        (
+            format!("{stem}_relative"),
+            caustics_metrics::relative_error_map(test, reference, None)?,
+        ),
+    ];
+    for (name, map) in maps {
+        let file = format!("{name}.png");
+        caustics_metrics::write_png(&dir.join(&file), &map)?;
+        images.insert(name, file);
+    }
     Ok(())
 }
 

@@ -171,8 +171,12 @@ pub struct Errors {
     /// instead of being scaled away. Absent when the ratio is absent or 0.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub rel_mse_after_flux: Option<f64>,
-    /// Mean [`hdr_flip`](crate::hdr_flip) (exposure-bracketed, Andersson et al. 2021), in
-    /// `[0, 1]`. Absent when the reference is black, and in older result files.
+    /// Mean HDR-FLIP (exposure-bracketed LDR-FLIP, Andersson et al. 2021), in `[0, 1]`,
+    /// over the bracket of [`hdr_flip_exposures_over`](crate::hdr_flip_exposures_over)
+    /// over the reference's caustic region: its brightest pixel just below white at the first
+    /// exposure, the region's median at 0.85 at the last (the authors' whole-image median
+    /// is 0 on a caustic image and would score the reference's photon noise). Absent
+    /// when the reference is black, and in older result files.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub hdr_flip: Option<f64>,
     /// Mean HDR-FLIP of the test image divided by `flux_ratio_image`, over the same
@@ -217,7 +221,8 @@ pub fn all_errors(
     };
     let (mut hdr, mut hdr_after, mut start, mut stop) = (None, None, None, None);
     if reference.pixels.iter().any(|&p| crate::luminance(p) > 0.0) {
-        let h = crate::hdr_flip(test, reference)?;
+        let (first, last) = crate::hdr_flip_exposures_over(reference, &region)?;
+        let h = crate::hdr_flip_with_exposures(test, reference, first, last)?;
         if let Some(t) = &flux_normalized {
             let after =
                 crate::hdr_flip_with_exposures(t, reference, h.start_exposure, h.stop_exposure)?;

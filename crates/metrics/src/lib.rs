@@ -58,7 +58,8 @@ pub use crate::flux::{
 };
 pub use crate::font::{GLYPH_H, draw_text, draw_text_vertical, text_width};
 pub use crate::hdr_flip::{
-    HDR_FLIP_ACES, HdrFlip, hdr_flip, hdr_flip_exposures, hdr_flip_with_exposures,
+    HDR_FLIP_ACES, HdrFlip, hdr_flip, hdr_flip_exposures, hdr_flip_exposures_over,
+    hdr_flip_with_exposures,
 };
 pub use crate::heatmap::{
     COLOR_BAR_WIDTH, HeatmapOptions, Histogram, HistogramBucket, MIN_MAP_HEIGHT, PANEL_BACKGROUND,

@@ -150,3 +150,30 @@ fn hdr_flip_refuses_a_black_reference_and_bad_brackets() {
     nan.set(1, 1, [f32::NAN; 3]);
     assert!(hdr_flip(&t, &nan).is_err());
 }
+
+/// On a caustic image (black outside its caustic) the whole-image median is 0 and the
+/// authors' bracket runs to ~24 stops; the bracket over the caustic region stops where
+/// the region's median content sits at 0.85, a few stops below the start.
+#[test]
+fn the_caustic_region_bracket_ends_at_the_regions_median() {
+    let mut reference = HdrImage::new(40, 30);
+    for y in 10..20 {
+        for x in 10..30 {
+            reference.set(x, y, [0.5 + 0.1 * (x % 3) as f32; 3]);
+        }
+    }
+    reference.set(20, 15, [8.0; 3]);
+    let region = caustics_metrics::caustic_region(&reference);
+    let (start, whole) = caustics_metrics::hdr_flip_exposures(&reference).expect("whole image");
+    let (start_r, stop_r) =
+        caustics_metrics::hdr_flip_exposures_over(&reference, &region).expect("region");
+    assert_eq!(start, start_r);
+    assert!(whole - start > 20.0, "whole-image bracket {start}..{whole}");
+    // Median content 0.6: log2(8 / 0.6) ≈ 3.7 stops wide.
+    assert!(
+        ((stop_r - start_r) - (8.0f32 / 0.6).log2()).abs() < 0.05,
+        "region bracket {start_r}..{stop_r}"
+    );
+    // A wrong-length region is an error, not a panic.
+    assert!(caustics_metrics::hdr_flip_exposures_over(&reference, &region[1..]).is_err());
+}
