@@ -59,6 +59,7 @@ pub(crate) fn load_gltf(
             format,
             message: e.to_string(),
         })?;
+    attributes_exist(&root)?;
     let doc = gltf::Document::from_json(root).map_err(|e| MeshError::Parse {
         format,
         message: validation_message(e),
@@ -184,6 +185,29 @@ pub(crate) fn load_gltf(
         ));
     }
     Ok(out)
+}
+
+/// Every primitive attribute names an existing accessor. Checked before
+/// `Document::from_json`, whose validation indexes the POSITION accessor unchecked
+/// (gltf-json 1.4.1, mesh.rs: a panic on an index past the accessors).
+fn attributes_exist(root: &gltf::json::Root) -> Result<(), MeshError> {
+    let n = root.accessors.len();
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, prim) in mesh.primitives.iter().enumerate() {
+            for (semantic, index) in &prim.attributes {
+                if index.value() >= n {
+                    return Err(invalid(
+                        format!("mesh {m} primitive {p}"),
+                        format!(
+                            "attribute {semantic:?} names accessor {}: expected one of the {n} accessors",
+                            index.value()
+                        ),
+                    ));
+                }
+            }
+        }
+    }
+    Ok(())
 }
 
 /// Pushes `node` on the walk's stack with its world matrix, checking the depth.
