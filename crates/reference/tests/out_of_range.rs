@@ -7,8 +7,12 @@ use caustics_reference::{Reference, ReferenceError};
 use caustics_scene::{Scene, Shape, Vec3};
 
 fn scene_with_triangle() -> Scene {
-    // A folder of this test process (no tempfile dependency in this crate).
-    let dir = std::env::temp_dir().join(format!("caustics-ref-range-{}", std::process::id()));
+    // A folder of this call (no tempfile dependency in this crate; tests run in
+    // parallel, so each call writes its own).
+    static CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let call = CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let dir =
+        std::env::temp_dir().join(format!("caustics-ref-range-{}-{call}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("mkdir");
     std::fs::write(dir.join("t.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").expect("write");
     let json = r#"{
