@@ -91,6 +91,21 @@ pub enum ReferenceError {
     /// The scene holds something the reference cannot render.
     #[error("unsupported scene content: {0}")]
     Unsupported(String),
+    /// An object reaches beyond [`caustics_scene::MAX_COORDINATE`] (or has a non-finite
+    /// vertex): its BVH and intersection math would overflow `f32`. Scenes loaded from
+    /// files never do (the loader refuses them); this guards scenes built in code.
+    #[error(
+        "object {object} ({kind}) reaches {reach} m from the origin: expected within ±{max:e} m",
+        max = caustics_scene::MAX_COORDINATE
+    )]
+    OutOfRange {
+        /// Index of the object in the scene.
+        object: usize,
+        /// Its shape kind (`mesh`, `sphere`, …).
+        kind: &'static str,
+        /// The largest |coordinate| it reaches (∞ or NaN for a non-finite vertex).
+        reach: f32,
+    },
 }
 
 /// How much to trace.
@@ -178,6 +193,7 @@ impl Reference {
                 "a camera image with no pixels".into(),
             ));
         }
+        check_range(scene)?;
         Ok(Reference {
             geometry: Geometry::new(scene),
             materials: scene
@@ -336,6 +352,36 @@ fn check(opts: &ReferenceOptions) -> Result<(), ReferenceError> {
         return Err(ReferenceError::BadBatches {
             batches: opts.batches,
         });
+    }
+    Ok(())
+}
+
+/// Refuses an object beyond [`caustics_scene::MAX_COORDINATE`] before the BVH is built
+/// (obvhs panics on the NaN costs of overflowing boxes).
+fn check_range(scene: &Scene) -> Result<(), ReferenceError> {
+    for (object, o) in scene.objects.iter().enumerate() {
+        let reach = match &o.shape {
+            // Per vertex: an Aabb's min/max would skip a NaN.
+            caustics_scene::Shape::Mesh(m) => m.positions.iter().fold(0.0f32, |r, p| {
+                let a = p.abs().max_element();
+                if p.is_finite() {
+                    r.max(a)
+                } else {
+                    f32::INFINITY
+                }
+            }),
+            shape => {
+                let b = shape.bounds();
+                b.min.abs().max(b.max.abs()).max_element()
+            }
+        };
+        if !reach.is_finite() || reach > caustics_scene::MAX_COORDINATE {
+            return Err(ReferenceError::OutOfRange {
+                object,
+                kind: o.shape.kind(),
+                reach,
+            });
+        }
     }
     Ok(())
 }

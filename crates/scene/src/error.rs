@@ -44,7 +44,7 @@ pub enum SceneError {
         message: String,
     },
     /// A mesh referenced by the scene could not be loaded or is unusable.
-    #[error("{}: {json_path}: cannot load mesh {}: {reason}", file.display(), mesh_file.display())]
+    #[error("{}: {json_path}: cannot load mesh {}: {source}", file.display(), mesh_file.display())]
     Mesh {
         /// The scene file.
         file: PathBuf,
@@ -52,8 +52,8 @@ pub enum SceneError {
         json_path: String,
         /// The mesh file, resolved against the scene file's folder.
         mesh_file: PathBuf,
-        /// Why it could not be used.
-        reason: String,
+        /// Why it could not be used: the element of the mesh file and what was expected.
+        source: Box<crate::MeshError>,
     },
     /// [`crate::resolve`] got a name that is neither a built-in scene nor a scene file.
     #[error("unknown scene `{name}`; built-in scenes: {}", available.join(", "))]

@@ -42,6 +42,7 @@ mod camera;
 mod error;
 mod hash;
 mod light;
+mod limits;
 mod mesh;
 mod raw;
 mod shape;
@@ -55,7 +56,8 @@ pub use glam::{Mat3, Mat4, Vec2, Vec3, Vec4};
 pub use camera::Camera;
 pub use error::SceneError;
 pub use light::{Light, Material, Medium, NamedMaterial};
-pub use mesh::{MeshTransform, smooth_normals};
+pub use limits::{Limits, MAX_COORDINATE};
+pub use mesh::{MeshError, MeshTransform, smooth_normals};
 pub use shape::{Aabb, Heightfield, Mesh, Shape, Wave, perpendicular_frame, quad_axes};
 pub use tessellate::{Tessellation, TriangleMesh};
 
@@ -91,22 +93,38 @@ pub struct Object {
 
 impl Scene {
     /// Reads and validates a scene file; mesh paths are relative to the file's folder.
+    ///
+    /// Meshes are checked against [`Limits::default`] (see [`Scene::load_with_limits`]).
     pub fn load(path: &Path) -> Result<Scene, SceneError> {
+        Scene::load_with_limits(path, &Limits::default())
+    }
+
+    /// [`Scene::load`] with other resource limits (to load a larger mesh).
+    pub fn load_with_limits(path: &Path, limits: &Limits) -> Result<Scene, SceneError> {
         let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
             file: path.to_path_buf(),
             source,
         })?;
-        Scene::from_json_str(&text, path)
+        Scene::from_json_str_with_limits(&text, path, limits)
     }
 
     /// Validates a scene given as JSON text. `source` names it in messages and its
     /// parent folder is the base of relative mesh paths.
     pub fn from_json_str(json: &str, source: &Path) -> Result<Scene, SceneError> {
+        Scene::from_json_str_with_limits(json, source, &Limits::default())
+    }
+
+    /// [`Scene::from_json_str`] with other resource limits.
+    pub fn from_json_str_with_limits(
+        json: &str,
+        source: &Path,
+        limits: &Limits,
+    ) -> Result<Scene, SceneError> {
         let base = source
             .parent()
             .filter(|p| !p.as_os_str().is_empty())
             .unwrap_or(Path::new("."));
-        validate::parse(json, source, base)
+        validate::parse(json, source, base, limits)
     }
 
     /// Bounds of all objects.

@@ -170,6 +170,9 @@ pub struct Mesh {
     /// True if the normals came from the file; false if they were computed as
     /// area-weighted smooth normals (vertices at one position share one normal).
     pub normals_from_file: bool,
+    /// Faces of the file dropped on load as degenerate: two equal corner indices, or a
+    /// zero (or non-finite) area after the transform. They are not in `indices`.
+    pub degenerate_dropped: usize,
 }
 
 /// An axis-aligned bounding box.

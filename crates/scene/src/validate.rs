@@ -1,12 +1,14 @@
 //! From the raw file to the typed [`Scene`]: every check of DESIGN.md's scene format,
 //! each error naming the exact JSON path of the bad value.
 
+use std::cell::RefCell;
 use std::path::Path;
 
 use glam::{Vec2, Vec3};
 
 use crate::light::{Light, Material, Medium, NamedMaterial};
-use crate::mesh::{MeshTransform, load_gltf, load_obj};
+use crate::limits::{Limits, MAX_COORDINATE};
+use crate::mesh::{Budget, MeshError, MeshTransform, invalid, load_gltf, load_obj};
 use crate::raw::{self, RawLight, RawMaterial, RawScene, RawShape, Source};
 use crate::shape::{Heightfield, Shape, Wave};
 use crate::{Camera, Object, Scene, SceneError};
@@ -17,12 +19,18 @@ pub(crate) const MAX_IMAGE_SIDE: u32 = 16384;
 pub(crate) const MAX_RESOLUTION: u32 = 4096;
 
 /// Parses and validates a whole document.
-pub(crate) fn parse(text: &str, file: &Path, base_dir: &Path) -> Result<Scene, SceneError> {
+pub(crate) fn parse(
+    text: &str,
+    file: &Path,
+    base_dir: &Path,
+    limits: &Limits,
+) -> Result<Scene, SceneError> {
     let src = Source { file, text };
     let raw = src.parse_scene()?;
     Builder {
         src: &src,
         base_dir,
+        budget: RefCell::new(Budget::new(*limits)),
     }
     .build(raw)
 }
@@ -30,6 +38,8 @@ pub(crate) fn parse(text: &str, file: &Path, base_dir: &Path) -> Result<Scene, S
 struct Builder<'a> {
     src: &'a Source<'a>,
     base_dir: &'a Path,
+    /// The triangles, vertices and mesh objects loaded so far.
+    budget: RefCell<Budget>,
 }
 
 fn fmt_list(v: &[f32]) -> String {
@@ -322,6 +332,16 @@ impl Builder<'_> {
             },
             RawShape::Mesh(m) => return self.mesh(i, &path, m, o, materials, objects),
         };
+        let b = shape.bounds();
+        let reach = b.min.abs().max(b.max.abs()).max_element();
+        if !reach.is_finite() || reach > MAX_COORDINATE {
+            return Err(self.err(
+                &path,
+                format!(
+                    "the shape reaches {reach} m from the origin: expected it within ±{MAX_COORDINATE:e} m (beyond, f32 geometry overflows in the BVH and on the GPU)"
+                ),
+            ));
+        }
         let material = self.material_ref(i, o, materials)?;
         objects.push(Object { shape, material });
         Ok(())
@@ -412,15 +432,16 @@ impl Builder<'_> {
         };
         let path_field = format!("{path}.path");
         let mesh_file = self.base_dir.join(&m.path);
-        let mesh_err = |reason: String| SceneError::Mesh {
+        let mesh_err = |source: MeshError| SceneError::Mesh {
             file: self.src.file.to_path_buf(),
             json_path: path_field.clone(),
             mesh_file: mesh_file.clone(),
-            reason,
+            source: Box::new(source),
         };
         if !mesh_file.is_file() {
-            return Err(mesh_err("the file does not exist".into()));
+            return Err(mesh_err(MeshError::Missing));
         }
+        let budget = &mut *self.budget.borrow_mut();
         let ext = mesh_file
             .extension()
             .and_then(|e| e.to_str())
@@ -429,7 +450,7 @@ impl Builder<'_> {
         match ext.as_str() {
             "obj" => {
                 let material = self.material_ref(i, o, materials)?;
-                let mesh = load_obj(&mesh_file, &xf.matrix()).map_err(mesh_err)?;
+                let mesh = load_obj(&mesh_file, &xf.matrix(), budget).map_err(mesh_err)?;
                 objects.push(Object {
                     shape: Shape::Mesh(mesh),
                     material,
@@ -440,7 +461,8 @@ impl Builder<'_> {
                     Some(_) => Some(self.material_ref(i, o, materials)?),
                     None => None,
                 };
-                let prims = load_gltf(&mesh_file, &xf.matrix()).map_err(mesh_err)?;
+                let prims =
+                    load_gltf(&mesh_file, self.base_dir, &xf.matrix(), budget).map_err(mesh_err)?;
                 let stem = mesh_file
                     .file_stem()
                     .map(|s| s.to_string_lossy().into_owned())
@@ -455,7 +477,9 @@ impl Builder<'_> {
                                 (_, Some(k)) => k.to_string(),
                                 _ => "default".into(),
                             };
-                            check_derived(&material).map_err(mesh_err)?;
+                            check_derived(&material).map_err(|problem| {
+                                mesh_err(invalid(format!("material {label}"), problem))
+                            })?;
                             add_material(materials, format!("{stem}/{label}"), material)
                         }
                     };
@@ -465,11 +489,7 @@ impl Builder<'_> {
                     });
                 }
             }
-            other => {
-                return Err(mesh_err(format!(
-                    "unsupported mesh format `.{other}`; expected .obj, .gltf or .glb"
-                )));
-            }
+            other => return Err(mesh_err(MeshError::Format(other.to_string()))),
         }
         Ok(())
     }

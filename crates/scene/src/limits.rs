@@ -1,0 +1,54 @@
+//! What a scene may hold: the bounds every mesh is checked against before use.
+
+/// Largest |coordinate| (metres) of any vertex after the object's transform.
+///
+/// Why 10⁶ m: the reference's BVH (SAH costs on box areas ~ x², PLOC over the scene
+/// box) and its ray-triangle tests (triple products ~ x³), the area-weighted normals
+/// (squared cross-product lengths ~ x⁴ = 10²⁴) and the GPU's f32 vertex math all stay
+/// far below f32's 3.4·10³⁸ there; at 10²⁰ the box areas overflow to ∞, the BVH costs
+/// become NaN and the BVH build panics. At 10⁶ m an f32 ulp is 6 cm, so geometry
+/// beyond it is not resolvable anyway. Scenes are metres across (see the reference's
+/// epsilon policy). This bound is not adjustable.
+pub const MAX_COORDINATE: f32 = 1.0e6;
+
+/// Resource limits of scene loading, checked before any large allocation.
+///
+/// [`crate::Scene::load`] uses [`Limits::default`]; raise a limit with
+/// [`crate::Scene::load_with_limits`] (e.g. `Limits { max_scene_triangles: 1 << 26,
+/// ..Limits::default() }`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Limits {
+    /// Triangles in one mesh file (all its models or primitives together). Default
+    /// 8 Mi (8,388,608).
+    pub max_mesh_triangles: u64,
+    /// Vertices in one mesh file. Default 8 Mi.
+    pub max_mesh_vertices: u64,
+    /// Triangles of all mesh files of a scene. Default 16 Mi: about 4 GB in the
+    /// reference's BVH (~250 B per triangle with its normals and build memory) and
+    /// 400 MB of GPU vertex and index buffers.
+    pub max_scene_triangles: u64,
+    /// Vertices of all mesh files of a scene. Default 16 Mi.
+    pub max_scene_vertices: u64,
+    /// Bytes of one mesh file, and separately of all the buffers a glTF file uses
+    /// (external files and decoded `data:` URIs). Default 1 GiB.
+    pub max_file_bytes: u64,
+    /// Mesh objects (glTF primitives placed by nodes, one per OBJ file) of a scene.
+    /// Default 16,384.
+    pub max_mesh_objects: u64,
+    /// Depth of a glTF node hierarchy (a scene's root nodes are at depth 1). Default 256.
+    pub max_node_depth: u32,
+}
+
+impl Default for Limits {
+    fn default() -> Self {
+        Limits {
+            max_mesh_triangles: 1 << 23,
+            max_mesh_vertices: 1 << 23,
+            max_scene_triangles: 1 << 24,
+            max_scene_vertices: 1 << 24,
+            max_file_bytes: 1 << 30,
+            max_mesh_objects: 16_384,
+            max_node_depth: 256,
+        }
+    }
+}
