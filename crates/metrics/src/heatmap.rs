@@ -3,9 +3,9 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::colorbar::{ColourBar, with_colour_bar};
 use crate::colormap::inferno;
 use crate::error_metrics::check_pair;
-use crate::font::{self, GLYPH_H};
 use crate::{HdrImage, MetricsError, Rgb8Image};
 
 /// Width in pixels of the colour-bar panel appended on the right of every heatmap and
@@ -18,14 +18,6 @@ pub const MIN_MAP_HEIGHT: u32 = 32;
 pub const PANEL_BACKGROUND: [u8; 3] = [40, 40, 40];
 /// Colour of pixels with a count of zero in a [`heatmap`].
 pub const ZERO_COUNT_COLOUR: [u8; 3] = [0, 0, 0];
-const LABEL_COLOUR: [u8; 3] = [235, 235, 235];
-
-// Panel layout, in columns relative to the panel's left edge.
-const BAR_X: u32 = 6;
-const BAR_W: u32 = 14;
-const LABEL_X: u32 = BAR_X + BAR_W + 4;
-const TITLE_X: u32 = COLOR_BAR_WIDTH - GLYPH_H - 1;
-const MARGIN_Y: u32 = 4;
 
 /// Options for [`heatmap_with`].
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
@@ -35,6 +27,15 @@ pub struct HeatmapOptions {
     pub max: Option<u32>,
     /// Map `ln(1 + count)` instead of `count`, for long-tailed fill-rate distributions.
     pub log: bool,
+}
+
+impl HeatmapOptions {
+    /// Options whose `max` is the largest count over all `panels`, so that every panel of
+    /// a figure is drawn on one scale.
+    pub fn shared(panels: &[&[u32]], log: bool) -> Self {
+        let max = panels.iter().flat_map(|p| p.iter().copied()).max();
+        Self { max, log }
+    }
 }
 
 /// Fill-rate heatmap of per-pixel counts (row 0 top) with a linear colour scale from 0 to
@@ -50,8 +51,12 @@ pub fn heatmap(
 
 /// Fill-rate heatmap: each count is colour-mapped with inferno, zero counts are
 /// [`ZERO_COUNT_COLOUR`] (black), and a [`COLOR_BAR_WIDTH`]-wide panel on the right holds
-/// the colour bar labelled with 0, the middle and the maximum of the scale (counts ≥ 10⁴
-/// are written with `k` or `M`) and `title` written vertically.
+/// the colour bar, labelled with whole counts ([`count_ticks`]; counts ≥ 10⁴ are written
+/// with `k` or `M`), and `title` written vertically.
+///
+/// A figure comparing methods passes one `options.max` to every panel (e.g. from
+/// [`HeatmapOptions::shared`]), linear or log: a count then has the same colour in every
+/// panel, and counts above the shared maximum saturate.
 pub fn heatmap_with(
     counts: &[u32],
     width: u32,
@@ -88,22 +93,70 @@ pub fn heatmap_with(
             inferno(t as f32)
         }
     };
-    let mid = if options.log {
-        (0.5 * max_f.ln_1p()).exp_m1()
-    } else {
-        0.5 * max_f
-    };
     let pixels = counts.iter().map(|&c| colour(to_t(f64::from(c)))).collect();
     let area = Rgb8Image {
         width,
         height,
         pixels,
     };
-    let labels = [format_count(max_f), format_count(mid), "0".to_owned()];
-    Ok(with_colour_bar(&area, colour, &labels, title))
+    let mut ticks: Vec<(f64, String)> = vec![(1.0, format_count(max_f)), (0.0, "0".to_owned())];
+    ticks.extend(
+        count_ticks(max, options.log)
+            .into_iter()
+            .filter(|&v| v != 0 && v != max)
+            .map(|v| (to_t(f64::from(v)), format_count(f64::from(v)))),
+    );
+    let colour = &colour;
+    Ok(with_colour_bar(
+        &area,
+        &ColourBar {
+            colour,
+            ticks,
+            title,
+            caps: None,
+        },
+    ))
 }
 
-/// Error map: per-pixel luminance of the absolute difference, `Y(|t − r|)` with the
+/// The counts a heatmap's colour bar labels for a scale topped at `max`: whole numbers
+/// only (no "2.5 fragments"), always 0 and `max`. Linear: multiples of a step of 1, 2 or
+/// 5 × 10ᵏ giving at most 5 intervals. Log: 0, 1, 10, 100, … below `max`, and `max`.
+/// Labels that would overlap on a short bar are left out when drawn, the ends first kept.
+pub fn count_ticks(max: u32, log: bool) -> Vec<u32> {
+    let mut ticks = vec![0u32];
+    if max == 0 {
+        return ticks;
+    }
+    if log {
+        let mut v = 1u64;
+        while v < u64::from(max) {
+            ticks.push(v as u32);
+            v *= 10;
+        }
+    } else {
+        let mut step = 1u64;
+        'search: for k in 0..10 {
+            for m in [1u64, 2, 5] {
+                step = m * 10u64.pow(k);
+                if u64::from(max) <= 5 * step {
+                    break 'search;
+                }
+            }
+        }
+        ticks.extend(
+            (1..)
+                .map(|i| i * step)
+                .take_while(|&v| v < u64::from(max))
+                .map(|v| v as u32),
+        );
+    }
+    ticks.push(max);
+    ticks
+}
+
+/// Error map (unsigned; [`signed_error_map`](crate::signed_error_map) replaces it in
+/// figures, since it says whether a method is too bright or too dark): per-pixel luminance
+/// of the absolute difference, `Y(|t − r|)` with the
 /// Rec. 709 weights applied to the per-channel absolute errors (so a pure chroma error
 /// still shows), colour-mapped with inferno on a linear scale from 0 to the maximum error,
 /// with a colour bar labelled 0, mid and max (in W·m⁻²·sr⁻¹) on the right.
@@ -176,50 +229,21 @@ pub fn error_map_with_max(
         height: test.height,
         pixels: errors.iter().map(|&e| colour(to_t(e))).collect(),
     };
-    let labels = [format_value(max), format_value(0.5 * max), "0".to_owned()];
-    Ok(with_colour_bar(&area, colour, &labels, "|t-r| luminance"))
-}
-
-/// Copies `area` into a wider image and draws the colour bar panel. `colour` maps a scale
-/// position `t ∈ [0, 1]` to a colour; `labels` are for t = 1, ½ and 0.
-fn with_colour_bar(
-    area: &Rgb8Image,
-    colour: impl Fn(f64) -> [u8; 3],
-    labels: &[String; 3],
-    title: &str,
-) -> Rgb8Image {
-    let out_h = area.height.max(MIN_MAP_HEIGHT);
-    let mut out = Rgb8Image::filled(area.width + COLOR_BAR_WIDTH, out_h, PANEL_BACKGROUND);
-    for y in 0..area.height {
-        for x in 0..area.width {
-            out.set(x, y, area.get(x, y));
-        }
-    }
-    let px = area.width;
-    let (top, bottom) = (MARGIN_Y, out_h - 1 - MARGIN_Y);
-    let span = f64::from(bottom - top);
-    for y in top..=bottom {
-        let t = f64::from(bottom - y) / span;
-        for x in 0..BAR_W {
-            out.set(px + BAR_X + x, y, colour(t));
-        }
-    }
-    // Labels centred vertically on their bar position, clamped into the image.
-    let half = GLYPH_H / 2;
-    let ys = [top, (top + bottom) / 2, bottom];
-    for (label, y) in labels.iter().zip(ys) {
-        let y = y.saturating_sub(half).min(out_h - GLYPH_H);
-        // Tick mark between bar and label.
-        for x in BAR_X + BAR_W..LABEL_X - 1 {
-            out.set(px + x, y + half, LABEL_COLOUR);
-        }
-        font::draw_text(&mut out, px + LABEL_X, y, label, LABEL_COLOUR);
-    }
-    let title_len = font::text_width(title);
-    let room = out_h - 2 * MARGIN_Y;
-    let y_bottom = out_h - MARGIN_Y - 1 - room.saturating_sub(title_len) / 2;
-    font::draw_text_vertical(&mut out, px + TITLE_X, y_bottom, title, LABEL_COLOUR);
-    out
+    let ticks = vec![
+        (1.0, format_value(max)),
+        (0.0, "0".to_owned()),
+        (0.5, format_value(0.5 * max)),
+    ];
+    let colour = &colour;
+    Ok(with_colour_bar(
+        &area,
+        &ColourBar {
+            colour,
+            ticks,
+            title: "|t-r| luminance",
+            caps: None,
+        },
+    ))
 }
 
 /// Formats a count for a colour-bar label: plain below 10 000, then `12.3k`, `1.23M`.

@@ -19,11 +19,19 @@
 //! # Ok::<(), caustics_metrics::MetricsError>(())
 //! ```
 //!
+//! Energy before shape: [`flux_ratio`] over the reference's [`caustic_region`] says whether
+//! the light is all there; relMSE and [`hdr_flip`] (exposure-bracketed, Andersson et al.
+//! 2021) after dividing by the whole-image flux ratio say whether it is in the right place
+//! (all in [`Errors`]). [`signed_error_map`] and [`relative_error_map`] draw the error with
+//! its sign and unit; heatmaps and maps of one figure take one shared scale.
+//!
 //! Files are written atomically ([`atomic_write`]): readers never see a partial EXR, PNG
 //! or result file.
 
+mod colorbar;
 mod colormap;
 mod error;
+mod error_maps;
 mod error_metrics;
 mod flip;
 mod flux;
@@ -35,8 +43,12 @@ mod io;
 mod ssim;
 mod tonemap;
 
-pub use crate::colormap::inferno;
+pub use crate::colormap::{COOL_WARM_NEUTRAL, cool_warm, inferno};
 pub use crate::error::MetricsError;
+pub use crate::error_maps::{
+    CLIP_HIGH_COLOUR, CLIP_LOW_COLOUR, SIGNED_ERROR_QUANTILE, relative_error_floor,
+    relative_error_map, signed_error_map, signed_error_max,
+};
 pub use crate::error_metrics::{
     Errors, REL_MSE_EPS, all_errors, best_scale, check_pair, psnr, rel_mse, rmse,
 };
@@ -50,8 +62,8 @@ pub use crate::hdr_flip::{
 };
 pub use crate::heatmap::{
     COLOR_BAR_WIDTH, HeatmapOptions, Histogram, HistogramBucket, MIN_MAP_HEIGHT, PANEL_BACKGROUND,
-    ZERO_COUNT_COLOUR, error_map, error_map_with_max, error_quantile, format_count, format_value,
-    heatmap, heatmap_with, histogram,
+    ZERO_COUNT_COLOUR, count_ticks, error_map, error_map_with_max, error_quantile, format_count,
+    format_value, heatmap, heatmap_with, histogram,
 };
 pub use crate::image::{HdrImage, REC709_LUMINANCE, Rgb8Image, luminance};
 pub use crate::io::{atomic_write, atomic_write_with, read_exr, read_png, write_exr, write_png};
