@@ -8,11 +8,21 @@
 //!   else the pair is not comparable (a regression: the baseline no longer says anything);
 //! - **deterministic figures** (fragment-shader invocations and primitives per pass, the
 //!   fill counts, the method's counters): equal, or within `--count-tolerance` (relative);
-//! - **errors** against the reference (RMSE, RMSE after the best scale, relMSE, FLIP):
-//!   worse when `new − base > max(--error-tolerance · base, --noise-k · σ_ref)`, σ_ref the
-//!   larger of the two references' noise RMS (for RMSE-like figures): a change inside the
-//!   reference's own noise means nothing;
-//! - **timings** (method and frame GPU ms): slower when the two-sided Mann-Whitney U test
+//! - **errors** against the reference, of the surface and, the same way, of the volume
+//!   caustic (measures `error <figure>` and `error volume <figure>`): relMSE, relMSE
+//!   after flux normalization, HDR-FLIP, LDR-FLIP, RMSE and RMSE after the best scale are
+//!   worse when `new − base > max(--error-tolerance · base, --noise-k · σ_ref)`, the noise
+//!   term only for the RMSE-like figures (σ_ref the larger of the two surface references'
+//!   noise RMS; the volume reference states none, so volume RMSE has the relative
+//!   tolerance alone): a change inside the reference's own noise means nothing. The flux
+//!   ratios (caustic region, whole image), whose ideal is 1, changed when
+//!   `|new − base| > --error-tolerance` (absolute), worse when they moved away from 1;
+//! - **like with like**: the pixel-averaged errors (`errors`) are compared only with
+//!   pixel-averaged errors of as many samples per pixel; the timed frame's 1-spp errors
+//!   (`errors_1spp`, measures `error 1spp <figure>`) with each other. A schema-1 file has
+//!   1-spp errors only: against it only the 1-spp errors are compared, and an Info line
+//!   says so. A figure the older file predates (e.g. HDR-FLIP) is shown, not gated;
+////! - **timings** (method and frame GPU ms): slower when the two-sided Mann-Whitney U test
 //!   over the per-frame samples gives p < `--alpha` *and* the median grew by more than
 //!   `--time-threshold`; files without per-frame samples fall back to "new p10 above base
 //!   p90 and median grew by more than the threshold". Timings on different adapters are
@@ -404,6 +414,12 @@ fn compare_run(key: &str, b: &RunResult, n: &RunResult, args: &CompareArgs, out:
     }
 }
 
+/// The samples per pixel of a run's pixel-averaged errors (1 for a schema-2 file that
+/// states no scoring frame, which no writer makes).
+fn score_spp(r: &RunResult) -> u32 {
+    r.scoring.as_ref().map_or(1, |s| s.samples_per_pixel)
+}
+
 fn compare_errors(
     key: &str,
     b: &RunResult,
@@ -411,9 +427,10 @@ fn compare_errors(
     args: &CompareArgs,
     out: &mut Vec<Line>,
 ) {
-    let (eb, en) = match (&b.errors, &n.errors) {
-        (None, None) => return,
-        (Some(_), None) => {
+    let any = |r: &RunResult| r.errors.is_some() || r.errors_1spp.is_some();
+    match (any(b), any(n)) {
+        (false, false) => return,
+        (true, false) => {
             out.push(line(
                 key,
                 "errors",
@@ -424,52 +441,241 @@ fn compare_errors(
             ));
             return;
         }
-        (None, Some(_)) => {
+        (false, true) => {
             out.push(line(key, "errors", "absent", "present", "", Verdict::Info));
             return;
         }
-        (Some(x), Some(y)) => (x, y),
-    };
+        (true, true) => {}
+    }
+    // Pixel-averaged errors only against pixel-averaged errors of as many samples.
+    match (&b.errors, &n.errors) {
+        (Some(x), Some(y)) if score_spp(b) == score_spp(n) => {
+            compare_report(key, "error", x, y, predates(b, n), args, out);
+        }
+        (Some(_), Some(_)) => out.push(line(
+            key,
+            "errors (pixel-averaged)",
+            &format!("{} spp", score_spp(b)),
+            &format!("{} spp", score_spp(n)),
+            "scored at other sample counts: not compared, the 1-spp errors are",
+            Verdict::Info,
+        )),
+        (x, y) if x.is_some() != y.is_some() => {
+            let side = |e: &Option<crate::result::ErrorReport>, r: &RunResult| {
+                if e.is_some() {
+                    format!("{} spp", score_spp(r))
+                } else {
+                    format!("1 spp only (schema {})", r.schema_version)
+                }
+            };
+            out.push(line(
+                key,
+                "errors (pixel-averaged)",
+                &side(x, b),
+                &side(y, n),
+                "one side has no pixel-averaged errors: comparing the 1-spp errors only",
+                Verdict::Info,
+            ));
+        }
+        _ => {}
+    }
+    match (&b.errors_1spp, &n.errors_1spp) {
+        (Some(x), Some(y)) => compare_report(key, "error 1spp", x, y, predates(b, n), args, out),
+        (Some(_), None) => out.push(line(
+            key,
+            "errors 1spp",
+            "present",
+            "absent",
+            "",
+            Verdict::Regression,
+        )),
+        (None, Some(_)) => out.push(line(
+            key,
+            "errors 1spp",
+            "absent",
+            "present",
+            "",
+            Verdict::Info,
+        )),
+        (None, None) => {}
+    }
+}
+
+/// Whether NEW's schema predates BASE's: figures BASE has and NEW lacks are then not lost,
+/// only never computed.
+fn predates(b: &RunResult, n: &RunResult) -> bool {
+    n.schema_version < b.schema_version
+}
+
+/// One gated figure: name, base, new, and how it is gated.
+type Figure = (&'static str, Option<f64>, Option<f64>, Gate);
+
+/// How a figure is gated.
+#[derive(Clone, Copy, PartialEq)]
+enum Gate {
+    /// Lower is better; worse beyond the relative tolerance or the reference noise.
+    RmseLike,
+    /// Lower is better; worse beyond the relative tolerance.
+    Relative,
+    /// A ratio whose ideal is 1: changed when `|Δ| > --error-tolerance`, worse when it
+    /// moved away from 1.
+    Flux,
+}
+
+/// Gates the surface errors of two reports, and their volume errors the same way.
+fn compare_report(
+    key: &str,
+    prefix: &str,
+    eb: &crate::result::ErrorReport,
+    en: &crate::result::ErrorReport,
+    new_predates: bool,
+    args: &CompareArgs,
+    out: &mut Vec<Line>,
+) {
     let noise = eb
         .reference_noise_rms
         .unwrap_or(0.0)
         .max(en.reference_noise_rms.unwrap_or(0.0));
-    let figures: [(&str, f64, f64, bool); 4] = [
-        ("RMSE", eb.surface.rmse, en.surface.rmse, true),
+    let figures = |name: &str, x, y, noise, out: &mut Vec<Line>| {
+        compare_figures(key, name, (x, y), noise, new_predates, args, out)
+    };
+    figures(prefix, &eb.surface, &en.surface, noise, out);
+    let name = format!("{prefix} volume");
+    match (&eb.volume, &en.volume) {
+        // The reference noise RMS is the surface image's: volume RMSE is gated on the
+        // relative tolerance alone.
+        (Some(x), Some(y)) => figures(&name, x, y, 0.0, out),
+        (Some(_), None) => out.push(line(
+            key,
+            &name,
+            "present",
+            "absent",
+            "no volume errors in NEW",
+            Verdict::Regression,
+        )),
+        (None, Some(_)) => out.push(line(key, &name, "absent", "present", "", Verdict::Info)),
+        (None, None) => {}
+    }
+}
+
+fn compare_figures(
+    key: &str,
+    prefix: &str,
+    (b, n): (&caustics_metrics::Errors, &caustics_metrics::Errors),
+    noise: f64,
+    new_predates: bool,
+    args: &CompareArgs,
+    out: &mut Vec<Line>,
+) {
+    let figures: [Figure; 8] = [
+        ("flux ratio", b.flux_ratio, n.flux_ratio, Gate::Flux),
+        (
+            "flux ratio (image)",
+            b.flux_ratio_image,
+            n.flux_ratio_image,
+            Gate::Flux,
+        ),
+        ("relMSE", Some(b.rel_mse), Some(n.rel_mse), Gate::Relative),
+        (
+            "relMSE after flux",
+            b.rel_mse_after_flux,
+            n.rel_mse_after_flux,
+            Gate::Relative,
+        ),
+        ("HDR-FLIP", b.hdr_flip, n.hdr_flip, Gate::Relative),
+        ("FLIP", Some(b.flip), Some(n.flip), Gate::Relative),
+        ("RMSE", Some(b.rmse), Some(n.rmse), Gate::RmseLike),
         (
             "RMSE after best scale",
-            eb.surface.rmse_after_best_scale,
-            en.surface.rmse_after_best_scale,
-            true,
+            Some(b.rmse_after_best_scale),
+            Some(n.rmse_after_best_scale),
+            Gate::RmseLike,
         ),
-        ("relMSE", eb.surface.rel_mse, en.surface.rel_mse, false),
-        ("FLIP", eb.surface.flip, en.surface.flip, false),
     ];
-    for (name, x, y, rmse_like) in figures {
-        let allowed = (args.error_tolerance * x.abs()).max(if rmse_like {
-            args.noise_k * noise
-        } else {
-            0.0
-        });
-        let verdict = if (!y.is_finite() && x.is_finite()) || y - x > allowed {
-            Verdict::Regression
-        } else if x - y > allowed {
-            Verdict::Better
-        } else {
-            Verdict::Same
+    for (name, x, y, gate) in figures {
+        let measure = format!("{prefix} {name}");
+        let (x, y) = match (x, y) {
+            (Some(x), Some(y)) => (x, y),
+            (None, None) => continue,
+            // A figure the older file predates is not a change.
+            (None, Some(_)) => {
+                out.push(line(key, &measure, "absent", "present", "", Verdict::Info));
+                continue;
+            }
+            (Some(x), None) if new_predates => {
+                out.push(line(
+                    key,
+                    &measure,
+                    &crate::summary::num(x),
+                    "absent",
+                    "NEW's schema predates it",
+                    Verdict::Info,
+                ));
+                continue;
+            }
+            (Some(x), None) => {
+                out.push(line(
+                    key,
+                    &measure,
+                    &crate::summary::num(x),
+                    "absent",
+                    "figure lost",
+                    Verdict::Regression,
+                ));
+                continue;
+            }
         };
-        let change = if x == y {
-            String::new()
-        } else {
-            format!(
-                "{:+.2}% (allowed ±{})",
-                100.0 * (y - x) / x.abs().max(1e-300),
-                crate::summary::num(allowed)
-            )
+        let (verdict, change) = match gate {
+            Gate::Flux => {
+                let d = y - x;
+                let verdict = if !y.is_finite() && x.is_finite() {
+                    Verdict::Regression
+                } else if d.abs() <= args.error_tolerance {
+                    Verdict::Same
+                } else if (y - 1.0).abs() > (x - 1.0).abs() {
+                    Verdict::Regression
+                } else {
+                    Verdict::Better
+                };
+                let change = if x == y {
+                    String::new()
+                } else {
+                    format!(
+                        "{:+.4} (allowed ±{}, ideal 1)",
+                        d,
+                        crate::summary::num(args.error_tolerance)
+                    )
+                };
+                (verdict, change)
+            }
+            Gate::Relative | Gate::RmseLike => {
+                let allowed = (args.error_tolerance * x.abs()).max(if gate == Gate::RmseLike {
+                    args.noise_k * noise
+                } else {
+                    0.0
+                });
+                let verdict = if (!y.is_finite() && x.is_finite()) || y - x > allowed {
+                    Verdict::Regression
+                } else if x - y > allowed {
+                    Verdict::Better
+                } else {
+                    Verdict::Same
+                };
+                let change = if x == y {
+                    String::new()
+                } else {
+                    format!(
+                        "{:+.2}% (allowed ±{})",
+                        100.0 * (y - x) / x.abs().max(1e-300),
+                        crate::summary::num(allowed)
+                    )
+                };
+                (verdict, change)
+            }
         };
         out.push(line(
             key,
-            &format!("error {name}"),
+            &measure,
             &crate::summary::num(x),
             &crate::summary::num(y),
             &change,

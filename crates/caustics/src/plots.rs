@@ -2,14 +2,24 @@
 //! plotters is built without a text feature and every label is drawn with the metrics
 //! crate's embedded 5×7 font), written as PNG:
 //!
-//! - `error_vs_time_<scene>.png`: RMSE against the method's GPU time, one colour per
-//!   method, with the Pareto front (runs no other run beats in both);
+//! - `<y>_vs_time_<scene>.png`: an error of the pixel-averaged scoring frame against the
+//!   method's GPU time, one colour per method, with the Pareto front (runs no other run
+//!   beats in both), for each y axis of [`error_axes`]: `error` (relMSE), `hdr_flip`
+//!   (HDR-FLIP), and `volume_error`, `volume_hdr_flip` when runs have volume errors;
+//! - `<y>_vs_<param>_<scene>.png`: the same errors against each numeric parameter swept
+//!   over 3+ values;
+//! - `heatmaps_<scene>.png`, `heatmaps_log_<scene>.png`: the fill-rate heatmaps of every
+//!   run of a scene side by side on one colour scale (the largest count over the
+//!   panels), linear and log;
 //! - `fragments.png`: fragment-shader invocations of the method's passes per run.
 
 use std::path::Path;
 
 use anyhow::{Result, anyhow};
-use caustics_metrics::{Rgb8Image, draw_text, draw_text_vertical, text_width};
+use caustics_metrics::{
+    HeatmapOptions, Rgb8Image, ZERO_COUNT_COLOUR, draw_text, draw_text_vertical, heatmap_with,
+    inferno, text_width,
+};
 use plotters::prelude::*;
 
 use crate::summary::{Row, Summary, num};
@@ -377,6 +387,87 @@ fn bar_label(r: &Row) -> String {
     format!("{} {} {}", r.scene, r.method, params.join(" "))
 }
 
+/// A y axis of the error plots: file stem, axis label, and the figure of a run.
+type ErrorAxis = (&'static str, &'static str, fn(&Row) -> Option<f64>);
+
+/// The y axes of the error plots, all of the pixel-averaged scoring frame (a schema-1 run,
+/// scored at 1 spp only, is left out rather than drawn among pixel-averaged ones).
+///
+/// relMSE as measured, not after flux normalization: a Pareto front of quality against
+/// cost must charge a method for light it loses or adds, and relMSE after flux forgives
+/// exactly that (the flux ratio in the summary says how much there is to forgive). relMSE,
+/// not RMSE: RMSE in linear HDR is set by the brightest pixel (the focus), relMSE weighs
+/// every pixel by its reference radiance. HDR-FLIP is the perceptual axis, over the
+/// exposure bracket of the reference, so neither a dark receiver nor a clipped focus hides
+/// an error.
+pub fn error_axes() -> [ErrorAxis; 4] {
+    [
+        (
+            "error",
+            "relMSE of the surface caustic (pixel-averaged)",
+            |r| r.errors.map(|e| e.rel_mse),
+        ),
+        (
+            "hdr_flip",
+            "HDR-FLIP of the surface caustic (pixel-averaged)",
+            |r| r.errors.and_then(|e| e.hdr_flip),
+        ),
+        (
+            "volume_error",
+            "relMSE of the volume caustic (pixel-averaged)",
+            |r| r.volume_errors.map(|e| e.rel_mse),
+        ),
+        (
+            "volume_hdr_flip",
+            "HDR-FLIP of the volume caustic (pixel-averaged)",
+            |r| r.volume_errors.and_then(|e| e.hdr_flip),
+        ),
+    ]
+}
+
+/// The per-pixel counts behind a run's own `fill_heatmap.png` (linear inferno scale from 0
+/// to `max`, its largest count; zero counts black), read back from its colours: a run
+/// keeps no raw counts. Exact while the colours of `1..=max` are distinct (`max` up to a
+/// few hundred); above that, a colour stands for a run of counts and gives their middle,
+/// so a count is known to about `max / 500`.
+pub fn counts_from_heatmap(img: &Rgb8Image, width: u32, height: u32, max: u32) -> Option<Vec<u32>> {
+    if img.width < width || img.height < height {
+        return None;
+    }
+    // Colour -> (smallest, largest) count drawn with it.
+    let mut table: std::collections::HashMap<[u8; 3], (u32, u32)> =
+        std::collections::HashMap::new();
+    for c in 1..=max {
+        let e = table
+            .entry(inferno((f64::from(c) / f64::from(max)) as f32))
+            .or_insert((c, c));
+        e.1 = c;
+    }
+    let mut out = Vec::with_capacity((width * height) as usize);
+    for y in 0..height {
+        for x in 0..width {
+            let p = img.get(x, y);
+            if p == ZERO_COUNT_COLOUR || max == 0 {
+                out.push(0);
+                continue;
+            }
+            let (lo, hi) = match table.get(&p) {
+                Some(r) => *r,
+                None => *table
+                    .iter()
+                    .min_by_key(|(k, _)| {
+                        (0..3)
+                            .map(|i| (i32::from(k[i]) - i32::from(p[i])).pow(2))
+                            .sum::<i32>()
+                    })
+                    .map(|(_, v)| v)?,
+            };
+            out.push(lo + (hi - lo) / 2);
+        }
+    }
+    Some(out)
+}
+
 /// Writes the plots of `s` into `dir`; returns their paths relative to the summary.
 pub fn write_plots(dir: &Path, s: &Summary) -> Result<Vec<String>> {
     let mut written = Vec::new();
@@ -398,119 +489,144 @@ pub fn write_plots(dir: &Path, s: &Summary) -> Result<Vec<String>> {
         written.push(format!("plots/{name}"));
         Ok(dir.join(name))
     };
-    for scene in &scenes {
-        let mut series = Vec::new();
-        let mut all = Vec::new();
-        for (i, m) in methods.iter().enumerate() {
-            let pts: Vec<(f64, f64)> = done
-                .iter()
-                .filter(|r| &r.scene == scene && &r.method == m)
-                .filter_map(|r| Some((r.method_gpu_ms?.median, r.errors?.rmse)))
-                .filter(|p| p.0.is_finite() && p.1.is_finite() && p.0 > 0.0 && p.1 >= 0.0)
-                .collect();
-            if !pts.is_empty() {
-                all.extend(pts.iter().copied());
-                series.push((m.clone(), PALETTE[i % PALETTE.len()], pts, false));
-            }
-        }
-        if all.is_empty() {
-            continue;
-        }
-        series.push(("pareto front".into(), INK, pareto_front(&all), true));
-        let path = need(
-            &mut written,
-            format!("error_vs_time_{}.png", file_safe(scene)),
-        )?;
-        scatter(
-            &path,
-            &format!("{}: {scene}: error against cost", s.experiment),
-            "method GPU ms (median)",
-            "RMSE of the surface caustic",
-            &series,
-        )?;
-    }
-    // Error against each numeric parameter swept over 3+ values, one line per method and
-    // setting of the other parameters (e.g. RMSE against samples per sampling strategy).
-    for scene in &scenes {
-        let runs: Vec<&Row> = done
-            .iter()
-            .copied()
-            .filter(|r| &r.scene == scene && r.errors.is_some())
-            .collect();
-        let mut names: Vec<&String> = runs.iter().flat_map(|r| r.params.keys()).collect();
-        names.sort();
-        names.dedup();
-        for name in names {
-            let mut lines: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
-            for r in &runs {
-                let (Some(x), Some(e)) = (r.params.get(name).and_then(|v| v.as_f64()), r.errors)
-                else {
-                    continue;
-                };
-                let mut rest: Vec<String> = r
-                    .params
+    for (stem, label, value) in error_axes() {
+        for scene in &scenes {
+            let mut series = Vec::new();
+            let mut all = Vec::new();
+            for (i, m) in methods.iter().enumerate() {
+                let pts: Vec<(f64, f64)> = done
                     .iter()
-                    .filter(|(k, _)| *k != name)
-                    .map(|(k, v)| {
-                        format!(
-                            "{k}={}",
-                            v.as_str().map(str::to_owned).unwrap_or(v.to_string())
-                        )
-                    })
+                    .filter(|r| &r.scene == scene && &r.method == m)
+                    .filter_map(|r| Some((r.method_gpu_ms?.median, value(r)?)))
+                    .filter(|p| p.0.is_finite() && p.1.is_finite() && p.0 > 0.0 && p.1 >= 0.0)
                     .collect();
-                rest.insert(0, r.method.clone());
-                let label = rest.join(" ");
-                match lines.iter_mut().find(|l| l.0 == label) {
-                    Some(l) => l.1.push((x, e.rmse)),
-                    None => lines.push((label, vec![(x, e.rmse)])),
+                if !pts.is_empty() {
+                    all.extend(pts.iter().copied());
+                    series.push((m.clone(), PALETTE[i % PALETTE.len()], pts, false));
                 }
             }
-            lines.retain(|l| l.1.len() >= 3);
-            if lines.is_empty() {
+            if all.is_empty() {
                 continue;
             }
-            let series: Vec<Series> = lines
-                .into_iter()
-                .enumerate()
-                .map(|(i, (label, mut pts))| {
-                    pts.sort_by(|a, b| a.0.total_cmp(&b.0));
-                    (label, PALETTE[i % PALETTE.len()], pts, true)
-                })
-                .collect();
+            series.push(("pareto front".into(), INK, pareto_front(&all), true));
             let path = need(
                 &mut written,
-                format!("error_vs_{}_{}.png", file_safe(name), file_safe(scene)),
+                format!("{stem}_vs_time_{}.png", file_safe(scene)),
             )?;
             scatter(
                 &path,
-                &format!("{}: {scene}: error against {name}", s.experiment),
-                name,
-                "RMSE of the surface caustic",
+                &format!("{}: {scene}: error against cost", s.experiment),
+                "method GPU ms (median)",
+                label,
                 &series,
             )?;
         }
+        // Error against each numeric parameter swept over 3+ values, one line per method
+        // and setting of the other parameters (e.g. relMSE against samples per strategy).
+        for scene in &scenes {
+            let runs: Vec<&Row> = done
+                .iter()
+                .copied()
+                .filter(|r| &r.scene == scene && value(r).is_some())
+                .collect();
+            let mut names: Vec<&String> = runs.iter().flat_map(|r| r.params.keys()).collect();
+            names.sort();
+            names.dedup();
+            for name in names {
+                let mut lines: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
+                for r in &runs {
+                    let (Some(x), Some(e)) =
+                        (r.params.get(name).and_then(|v| v.as_f64()), value(r))
+                    else {
+                        continue;
+                    };
+                    if !e.is_finite() {
+                        continue;
+                    }
+                    let mut rest: Vec<String> = r
+                        .params
+                        .iter()
+                        .filter(|(k, _)| *k != name)
+                        .map(|(k, v)| {
+                            format!(
+                                "{k}={}",
+                                v.as_str().map(str::to_owned).unwrap_or(v.to_string())
+                            )
+                        })
+                        .collect();
+                    rest.insert(0, r.method.clone());
+                    let label = rest.join(" ");
+                    match lines.iter_mut().find(|l| l.0 == label) {
+                        Some(l) => l.1.push((x, e)),
+                        None => lines.push((label, vec![(x, e)])),
+                    }
+                }
+                lines.retain(|l| l.1.len() >= 3);
+                if lines.is_empty() {
+                    continue;
+                }
+                let series: Vec<Series> = lines
+                    .into_iter()
+                    .enumerate()
+                    .map(|(i, (label, mut pts))| {
+                        pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+                        (label, PALETTE[i % PALETTE.len()], pts, true)
+                    })
+                    .collect();
+                let path = need(
+                    &mut written,
+                    format!("{stem}_vs_{}_{}.png", file_safe(name), file_safe(scene)),
+                )?;
+                scatter(
+                    &path,
+                    &format!("{}: {scene}: error against {name}", s.experiment),
+                    name,
+                    label,
+                    &series,
+                )?;
+            }
+        }
     }
-    // Fill-rate heatmaps of every run of a scene side by side, with their colour bars.
+    // Fill-rate heatmaps of every run of a scene side by side, on one colour scale.
     if let Some(root) = dir.parent() {
         for scene in &scenes {
-            let tiles: Vec<(String, Rgb8Image)> = done
+            let panels: Vec<(String, Vec<u32>, u32, u32)> = done
                 .iter()
                 .filter(|r| &r.scene == scene)
                 .filter_map(|r| {
                     let p = root.join(r.dir.as_ref()?).join("fill_heatmap.png");
                     let img = caustics_metrics::read_png(&p).ok()?;
-                    Some((bar_label(r), img))
+                    let counts = counts_from_heatmap(&img, r.width, r.height, r.fill_max?)?;
+                    Some((bar_label(r), counts, r.width, r.height))
                 })
                 .collect();
-            if tiles.len() < 2 {
+            if panels.len() < 2 {
                 continue;
             }
-            let path = need(&mut written, format!("heatmaps_{}.png", file_safe(scene)))?;
-            tile(
-                &path,
-                &format!("{}: {scene}: fragments per pixel", s.experiment),
-                &tiles,
-            )?;
+            let counts: Vec<&[u32]> = panels.iter().map(|p| p.1.as_slice()).collect();
+            for (log, name) in [(false, "heatmaps"), (true, "heatmaps_log")] {
+                let options = HeatmapOptions::shared(&counts, log);
+                let tiles = panels
+                    .iter()
+                    .map(|(label, c, w, h)| {
+                        Ok((
+                            label.clone(),
+                            heatmap_with(c, *w, *h, "fragments/px", &options)?,
+                        ))
+                    })
+                    .collect::<Result<Vec<_>>>()?;
+                let path = need(&mut written, format!("{name}_{}.png", file_safe(scene)))?;
+                tile(
+                    &path,
+                    &format!(
+                        "{}: {scene}: fragments per pixel, one {} scale (0 to {})",
+                        s.experiment,
+                        if log { "log" } else { "linear" },
+                        options.max.unwrap_or(0)
+                    ),
+                    &tiles,
+                )?;
+            }
         }
     }
     let frags: Vec<(&Row, u64)> = done
@@ -520,6 +636,17 @@ pub fn write_plots(dir: &Path, s: &Summary) -> Result<Vec<String>> {
     if !frags.is_empty() {
         let path = need(&mut written, "fragments.png".into())?;
         fragments_plot(&path, &frags, &methods)?;
+    }
+    // plots/ is output: a plot an earlier summary drew and this one does not (an RMSE
+    // plot of before, a scene no longer run) would be shown by `caustics report` as if
+    // it were current.
+    if dir.is_dir() {
+        for entry in std::fs::read_dir(dir)?.flatten() {
+            let name = entry.file_name().to_string_lossy().into_owned();
+            if name.ends_with(".png") && !written.contains(&format!("plots/{name}")) {
+                std::fs::remove_file(entry.path())?;
+            }
+        }
     }
     Ok(written)
 }
@@ -567,5 +694,81 @@ mod tests {
         assert_eq!((img.width, img.height), (720, 420));
         assert!(img.pixels.contains(&PALETTE[0]), "no point drawn");
         assert!(img.pixels.contains(&INK), "no text or frame drawn");
+    }
+
+    #[test]
+    fn heatmap_counts_read_back_from_their_colours() {
+        let (w, h) = (9u32, 5u32);
+        let small: Vec<u32> = (0..w * h).map(|i| (i * 7) % 40).collect();
+        let img = caustics_metrics::heatmap(&small, w, h, "t").expect("heatmap");
+        let back = counts_from_heatmap(&img, w, h, 39).expect("decode");
+        assert_eq!(back, small, "exact while colours are distinct");
+        // A large maximum: each count known to about max / 500.
+        let large: Vec<u32> = (0..w * h).map(|i| (i * 997) % 5001).collect();
+        let max = *large.iter().max().expect("max");
+        let img = caustics_metrics::heatmap(&large, w, h, "t").expect("heatmap");
+        let back = counts_from_heatmap(&img, w, h, max).expect("decode");
+        for (a, b) in large.iter().zip(&back) {
+            assert!(a.abs_diff(*b) <= max / 100, "{a} read back as {b}");
+            assert_eq!(*a == 0, *b == 0, "zero counts stay zero");
+        }
+    }
+
+    fn row(dir: &str, method: &str, max: u32) -> Row {
+        let mut r = crate::summary::test_row(method);
+        r.width = 8;
+        r.height = 4;
+        r.dir = Some(dir.into());
+        r.fill_max = Some(max);
+        r
+    }
+
+    #[test]
+    fn the_heatmap_panels_of_a_scene_share_one_colour_scale() {
+        let tmp = tempfile::tempdir().expect("tempdir");
+        // Run a's counts top out at 10, run b's at 100.
+        for (d, max) in [("a", 10u32), ("b", 100)] {
+            let counts: Vec<u32> = (0..32).map(|i| if i == 0 { max } else { i % 3 }).collect();
+            let img = caustics_metrics::heatmap(&counts, 8, 4, "own").expect("heatmap");
+            std::fs::create_dir_all(tmp.path().join(d)).expect("mkdir");
+            caustics_metrics::write_png(&tmp.path().join(d).join("fill_heatmap.png"), &img)
+                .expect("png");
+        }
+        let s = Summary {
+            schema_version: 1,
+            experiment: "x".into(),
+            description: String::new(),
+            scale: 1.0,
+            adapters: vec![],
+            commits: vec![],
+            profiles: vec![],
+            paper: None,
+            done: 2,
+            skipped: 0,
+            failed: 0,
+            missing_references: vec![],
+            runs: vec![row("a", "m1", 10), row("b", "m2", 100)],
+        };
+        std::fs::create_dir_all(tmp.path().join("plots")).expect("mkdir");
+        std::fs::write(tmp.path().join("plots/error_vs_time_old.png"), b"stale").expect("write");
+        let written = write_plots(&tmp.path().join("plots"), &s).expect("plots");
+        assert!(
+            !tmp.path().join("plots/error_vs_time_old.png").exists(),
+            "a plot of an earlier summary stays"
+        );
+        assert!(
+            written.contains(&"plots/heatmaps_s.png".to_owned())
+                && written.contains(&"plots/heatmaps_log_s.png".to_owned()),
+            "{written:?}"
+        );
+        // Own scales: both runs' maxima are the top colour. Shared: only b's is.
+        let top = inferno(1.0);
+        let img =
+            caustics_metrics::read_png(&tmp.path().join("plots/heatmaps_s.png")).expect("png");
+        let panel_w = 8 + caustics_metrics::COLOR_BAR_WIDTH;
+        let cell_w = panel_w.max(text_width(&bar_label(&s.runs[0]))) + 8;
+        let (a, b) = (img.get(8, 20 + 12), img.get(8 + cell_w, 20 + 12));
+        assert_eq!(b, top, "b's maximum tops the shared scale");
+        assert_eq!(a, inferno(0.1), "a's maximum of 10 is a tenth of it");
     }
 }

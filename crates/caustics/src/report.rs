@@ -1,6 +1,7 @@
 //! `caustics report [DIR]`: a static, self-contained HTML report (one folder:
 //! `index.html` plus the images it shows, copied beside it) of every reproduced
-//! experiment under DIR: the machine and commit, the tables of `summary.md`, the plots,
+//! experiment under DIR: the machine and commit, the tables of `summary.md` (surface
+//! errors beside the costs, volume errors in a table of their own), the plots,
 //! and per run the composite, the error map and the fill-rate heatmap (both with their
 //! colour bars). No script, stylesheet or font is fetched from anywhere; a tiny inline
 //! script only marks, for automated checks, whether every image loaded.
@@ -85,40 +86,67 @@ fn spread(s: &Option<crate::summary::Spread>) -> String {
         .unwrap_or_else(|| "–".into())
 }
 
+fn params_cell(r: &Row) -> String {
+    let params = r
+        .params
+        .iter()
+        .map(|(k, v)| {
+            format!(
+                "{k}={}",
+                v.as_str().map(str::to_owned).unwrap_or(v.to_string())
+            )
+        })
+        .collect::<Vec<_>>()
+        .join(" ");
+    if params.is_empty() {
+        "defaults".into()
+    } else {
+        params
+    }
+}
+
+/// The columns of [`crate::summary::ERROR_COLUMNS`] as table headers.
+fn error_headers() -> String {
+    crate::summary::ERROR_COLUMNS
+        .iter()
+        .map(|c| format!("<th>{}</th>", esc(c)))
+        .collect()
+}
+
+fn error_tds(cells: &[String]) -> String {
+    cells
+        .iter()
+        .map(|c| format!("<td>{}</td>", esc(c)))
+        .collect()
+}
+
 fn table(html: &mut String, s: &Summary, rows: &[&Row]) {
     let paper = s
         .paper
         .as_ref()
         .filter(|_| rows.iter().any(|r| !r.paper.is_empty()));
-    html.push_str("<table><tr><th>scene</th><th>method</th><th>params</th><th>size</th><th>method GPU ms</th><th>frame GPU ms</th><th>fragments</th><th>RMSE</th><th>FLIP</th><th>best scale s</th><th>RMSE after s</th><th>FLIP after s</th><th>σ<sub>ref</sub></th>");
+    let _ = write!(
+        html,
+        "<table><tr><th>scene</th><th>method</th><th>params</th><th>size</th><th>method GPU ms</th><th>frame GPU ms</th><th>fragments</th>{}<th>σ<sub>ref</sub></th>",
+        error_headers()
+    );
     if let Some(p) = paper {
         let _ = write!(html, "<th class=paper>paper ({})</th>", esc(&p.hardware));
     }
     html.push_str("</tr>\n");
     for r in rows {
-        let params = r
-            .params
-            .iter()
-            .map(|(k, v)| {
-                format!(
-                    "{k}={}",
-                    v.as_str().map(str::to_owned).unwrap_or(v.to_string())
-                )
-            })
-            .collect::<Vec<_>>()
-            .join(" ");
-        let e = r.errors.as_ref();
-        let f = |v: Option<f64>| v.map(num).unwrap_or_else(|| "–".into());
+        let cells = crate::summary::error_cells(
+            r.score_spp,
+            r.errors.as_ref(),
+            r.errors_1spp.as_ref(),
+            r.exposure_scale,
+        );
         let _ = write!(
             html,
-            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}×{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td>",
+            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}×{}</td><td>{}</td><td>{}</td><td>{}</td>{}<td>{}</td>",
             esc(&r.scene),
             esc(&r.method),
-            esc(if params.is_empty() {
-                "defaults"
-            } else {
-                &params
-            }),
+            esc(&params_cell(r)),
             r.width,
             r.height,
             spread(&r.method_gpu_ms),
@@ -126,12 +154,8 @@ fn table(html: &mut String, s: &Summary, rows: &[&Row]) {
             r.fragments
                 .map(|v| v.to_string())
                 .unwrap_or_else(|| "–".into()),
-            f(e.map(|e| e.rmse)),
-            f(e.map(|e| e.flip)),
-            f(e.map(|e| e.best_scale)),
-            f(e.map(|e| e.rmse_after_best_scale)),
-            f(e.and_then(|e| e.flip_after_best_scale)),
-            f(r.reference_noise_rms),
+            error_tds(&cells),
+            r.reference_noise_rms.map(num).unwrap_or_else(|| "–".into()),
         );
         if paper.is_some() {
             let cell = r
@@ -148,6 +172,34 @@ fn table(html: &mut String, s: &Summary, rows: &[&Row]) {
         html.push_str("</tr>\n");
     }
     html.push_str("</table>\n");
+    let volume: Vec<&&Row> = rows
+        .iter()
+        .filter(|r| r.volume_errors.is_some() || r.volume_errors_1spp.is_some())
+        .collect();
+    if !volume.is_empty() {
+        let _ = writeln!(
+            html,
+            "<p class=meta>Volume caustic errors:</p><table><tr><th>scene</th><th>method</th><th>params</th>{}</tr>",
+            error_headers()
+        );
+        for r in volume {
+            let cells = crate::summary::error_cells(
+                r.score_spp,
+                r.volume_errors.as_ref(),
+                r.volume_errors_1spp.as_ref(),
+                r.volume_exposure_scale,
+            );
+            let _ = writeln!(
+                html,
+                "<tr><td>{}</td><td>{}</td><td>{}</td>{}</tr>",
+                esc(&r.scene),
+                esc(&r.method),
+                esc(&params_cell(r)),
+                error_tds(&cells)
+            );
+        }
+        html.push_str("</table>\n");
+    }
 }
 
 fn experiment_section(html: &mut String, dir: &Path, out: &Path) -> Result<()> {

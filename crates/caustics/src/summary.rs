@@ -114,8 +114,31 @@ pub struct Row {
     pub fill_total: Option<u64>,
     /// The method's counters.
     pub counters: BTreeMap<String, u64>,
-    /// Surface caustic errors against the reference.
+    /// Samples per pixel of the scoring frame that `errors` and `volume_errors` were
+    /// computed on; absent when the run has no pixel-averaged errors (a schema-1 result,
+    /// whose only errors are the timed frame's, `errors_1spp`).
+    #[serde(default)]
+    pub score_spp: Option<u32>,
+    /// Surface caustic errors of the pixel-averaged scoring frame against the reference.
     pub errors: Option<caustics_metrics::Errors>,
+    /// Surface caustic errors of the timed frame (one sample at each pixel centre).
+    #[serde(default)]
+    pub errors_1spp: Option<caustics_metrics::Errors>,
+    /// Volume caustic errors of the pixel-averaged scoring frame.
+    #[serde(default)]
+    pub volume_errors: Option<caustics_metrics::Errors>,
+    /// Volume caustic errors of the timed frame.
+    #[serde(default)]
+    pub volume_errors_1spp: Option<caustics_metrics::Errors>,
+    /// Exposure of the surface LDR-FLIP (`tone_map.exposure_scale`).
+    #[serde(default)]
+    pub exposure_scale: Option<f32>,
+    /// Exposure of the volume LDR-FLIP (`tone_map.volume_exposure_scale`).
+    #[serde(default)]
+    pub volume_exposure_scale: Option<f32>,
+    /// Largest per-pixel fill count (the top of the run's own `fill_heatmap.png`).
+    #[serde(default)]
+    pub fill_max: Option<u32>,
     /// The reference's own noise (RMS of its standard error).
     pub reference_noise_rms: Option<f64>,
     /// The paper's figures for this run.
@@ -134,19 +157,73 @@ pub struct PaperValue {
     pub note: String,
 }
 
+/// The figures of one [`caustics_metrics::Errors`] by measure name, headline first
+/// (energy, then shape), the RMSE and best-scale diagnostics last.
+pub fn error_figures(e: &caustics_metrics::Errors) -> [(&'static str, Option<f64>); 12] {
+    [
+        ("flux_ratio", e.flux_ratio),
+        ("flux_ratio_image", e.flux_ratio_image),
+        ("rel_mse", Some(e.rel_mse)),
+        ("rel_mse_after_flux", e.rel_mse_after_flux),
+        ("hdr_flip", e.hdr_flip),
+        ("hdr_flip_after_flux", e.hdr_flip_after_flux),
+        ("flip", Some(e.flip)),
+        ("rmse", Some(e.rmse)),
+        ("best_scale", Some(e.best_scale)),
+        ("rmse_after_best_scale", Some(e.rmse_after_best_scale)),
+        ("rel_mse_after_best_scale", e.rel_mse_after_best_scale),
+        ("flip_after_best_scale", e.flip_after_best_scale),
+    ]
+}
+
 impl Row {
-    /// The measured value of a paper measure, if this run has it.
+    /// The measured value of a paper measure, if this run has it: the timing and count
+    /// measures, `counter:<name>`, or any error measure of [`Row::error_measures`].
     pub fn measure(&self, measure: &str) -> Option<f64> {
         match measure {
             "method_gpu_ms" => self.method_gpu_ms.map(|s| s.median),
             "frame_gpu_ms" => self.frame_gpu_ms.map(|s| s.median),
             "fps" => self.frame_gpu_ms.map(|s| 1000.0 / s.median),
             "fragments" => self.fragments.map(|f| f as f64),
-            m => m
-                .strip_prefix("counter:")
-                .and_then(|c| self.counters.get(c))
-                .map(|&v| v as f64),
+            m => match m.strip_prefix("counter:") {
+                Some(c) => self.counters.get(c).map(|&v| v as f64),
+                None => self
+                    .error_measures()
+                    .into_iter()
+                    .find(|(k, _)| k == m)
+                    .map(|(_, v)| v),
+            },
         }
+    }
+
+    /// Every error figure of the run by its `bmf.json` measure name:
+    /// `[volume_]<figure>` of the pixel-averaged scoring frame ([`error_figures`] names),
+    /// `[volume_]<figure>_1spp` of the timed frame, and the camera-aliasing share
+    /// `[volume_]rel_mse_aliasing` = `rel_mse_1spp − rel_mse` (likewise
+    /// `hdr_flip_aliasing`) where both exist. A schema-1 run has only the `_1spp` ones.
+    pub fn error_measures(&self) -> Vec<(String, f64)> {
+        let mut out = Vec::new();
+        for (prefix, avg, one) in [
+            ("", &self.errors, &self.errors_1spp),
+            ("volume_", &self.volume_errors, &self.volume_errors_1spp),
+        ] {
+            for (suffix, e) in [("", avg), ("_1spp", one)] {
+                let Some(e) = e else { continue };
+                for (name, v) in error_figures(e) {
+                    if let Some(v) = v.filter(|v| v.is_finite()) {
+                        out.push((format!("{prefix}{name}{suffix}"), v));
+                    }
+                }
+            }
+            if let (Some(a), Some(o)) = (avg, one) {
+                out.push((format!("{prefix}rel_mse_aliasing"), o.rel_mse - a.rel_mse));
+                if let (Some(x), Some(y)) = (a.hdr_flip, o.hdr_flip) {
+                    out.push((format!("{prefix}hdr_flip_aliasing"), y - x));
+                }
+            }
+        }
+        out.retain(|(_, v)| v.is_finite());
+        out
     }
 }
 
@@ -231,12 +308,37 @@ pub fn build(out: &Path, e: &Experiment, m: &Manifest) -> Result<Summary> {
                 .as_ref()
                 .map(|r| r.counters.clone())
                 .unwrap_or_default(),
+            score_spp: result.as_ref().and_then(|r| {
+                r.errors.as_ref()?;
+                // A schema-2 file always states its scoring frame; without it the
+                // errors were scored like the timed frame.
+                Some(r.scoring.as_ref().map_or(1, |s| s.samples_per_pixel))
+            }),
             errors: result
                 .as_ref()
                 .and_then(|r| r.errors.as_ref().map(|e| e.surface)),
-            reference_noise_rms: result
+            errors_1spp: result
                 .as_ref()
-                .and_then(|r| r.errors.as_ref().and_then(|e| e.reference_noise_rms)),
+                .and_then(|r| r.errors_1spp.as_ref().map(|e| e.surface)),
+            volume_errors: result
+                .as_ref()
+                .and_then(|r| r.errors.as_ref().and_then(|e| e.volume)),
+            volume_errors_1spp: result
+                .as_ref()
+                .and_then(|r| r.errors_1spp.as_ref().and_then(|e| e.volume)),
+            exposure_scale: result.as_ref().map(|r| r.tone_map.exposure_scale),
+            volume_exposure_scale: result
+                .as_ref()
+                .and_then(|r| r.tone_map.volume_exposure_scale),
+            fill_max: result
+                .as_ref()
+                .and_then(|r| r.fragments.as_ref().map(|f| f.fill_max)),
+            reference_noise_rms: result.as_ref().and_then(|r| {
+                r.errors
+                    .as_ref()
+                    .or(r.errors_1spp.as_ref())
+                    .and_then(|e| e.reference_noise_rms)
+            }),
             paper,
         });
     }
@@ -276,16 +378,28 @@ pub fn write_all(out: &Path, e: &Experiment, m: &Manifest) -> Result<Summary> {
     Ok(s)
 }
 
-/// Reads `summary.json` of an experiment folder.
+/// Reads `summary.json` of an experiment folder. A summary written before rows had
+/// `score_spp` held the timed frame's errors under `errors` (schema-1 runs): they are
+/// moved to `errors_1spp` (and `volume_errors_1spp`), as [`RunResult::from_json`] does.
 pub fn read_summary(dir: &Path) -> Result<Summary> {
     let p = dir.join("summary.json");
     let text = std::fs::read_to_string(&p).with_context(|| format!("reading {}", p.display()))?;
-    serde_json::from_str(&text).with_context(|| format!("{}: not a summary.json", p.display()))
+    let mut s: Summary = serde_json::from_str(&text)
+        .with_context(|| format!("{}: not a summary.json", p.display()))?;
+    for r in &mut s.runs {
+        if r.score_spp.is_none() && r.errors_1spp.is_none() && r.errors.is_some() {
+            r.errors_1spp = r.errors.take();
+            r.volume_errors_1spp = r.volume_errors.take();
+        }
+    }
+    Ok(s)
 }
 
 /// Bencher Metric Format: `{ "<experiment>/<run key>": { "<measure>": {"value": v,
 /// "lower_value": lo, "upper_value": hi} } }`. Timings carry their p10/p90 as bounds;
-/// counts and errors are single values.
+/// counts and errors are single values, the errors named as in [`Row::error_measures`]
+/// (the old names `rmse`, `rel_mse`, `flip`, `best_scale`, ... are the pixel-averaged
+/// figures of a schema-2 run; a schema-1 run has only their `_1spp` forms).
 pub fn bmf(s: &Summary) -> serde_json::Value {
     use serde_json::{Map, Value, json};
     let mut out = Map::new();
@@ -313,18 +427,8 @@ pub fn bmf(s: &Summary) -> serde_json::Value {
         for (k, v) in &r.counters {
             single(format!("counter_{k}"), *v as f64);
         }
-        if let Some(e) = &r.errors {
-            single("rmse".into(), e.rmse);
-            single("rel_mse".into(), e.rel_mse);
-            single("flip".into(), e.flip);
-            single("best_scale".into(), e.best_scale);
-            single("rmse_after_best_scale".into(), e.rmse_after_best_scale);
-            if let Some(v) = e.rel_mse_after_best_scale {
-                single("rel_mse_after_best_scale".into(), v);
-            }
-            if let Some(v) = e.flip_after_best_scale {
-                single("flip_after_best_scale".into(), v);
-            }
+        for (name, v) in r.error_measures() {
+            single(name, v);
         }
         out.insert(format!("{}/{}", s.experiment, r.key), Value::Object(m));
     }
@@ -378,7 +482,91 @@ fn paper_cell(r: &Row) -> String {
         .join("; ")
 }
 
-/// The markdown summary: one table per group, skipped and failed runs listed.
+/// The error columns of a summary table, headline first: energy (flux ratios), shape
+/// (relMSE, HDR-FLIP, before and after flux normalization), LDR-FLIP at its stated
+/// exposure; then the timed frame's 1-spp figures and the aliasing share; RMSE and the
+/// best scale last, as diagnostics.
+pub const ERROR_COLUMNS: [&str; 16] = [
+    "spp",
+    "flux",
+    "flux (image)",
+    "relMSE",
+    "relMSE after flux",
+    "HDR-FLIP",
+    "HDR-FLIP after flux",
+    "LDR-FLIP @exposure",
+    "relMSE 1spp",
+    "HDR-FLIP 1spp",
+    "LDR-FLIP 1spp",
+    "aliasing: relMSE 1spp − relMSE",
+    "RMSE",
+    "RMSE 1spp",
+    "s",
+    "RMSE·s",
+];
+
+/// The cells under [`ERROR_COLUMNS`] of one run's surface or volume errors: `avg` of the
+/// scoring frame at `spp` samples per pixel, `one` of the timed frame. A run without
+/// pixel-averaged errors (schema 1) shows "–" in every pixel-averaged column and its
+/// errors in the 1-spp ones.
+pub fn error_cells(
+    spp: Option<u32>,
+    avg: Option<&caustics_metrics::Errors>,
+    one: Option<&caustics_metrics::Errors>,
+    exposure: Option<f32>,
+) -> [String; 16] {
+    let dash = || "–".to_owned();
+    let opt = |v: Option<f64>| v.map(num).unwrap_or_else(dash);
+    let spp = match (spp, avg, one) {
+        (Some(n), Some(_), _) => n.to_string(),
+        (_, None, Some(_)) => "1 only (schema 1)".into(),
+        _ => dash(),
+    };
+    let flip = |e: Option<&caustics_metrics::Errors>| match (e, exposure) {
+        (Some(e), Some(x)) => {
+            let x = format!("{x:.3}");
+            format!(
+                "{} @{}",
+                num(e.flip),
+                x.trim_end_matches('0').trim_end_matches('.')
+            )
+        }
+        (Some(e), None) => num(e.flip),
+        (None, _) => dash(),
+    };
+    let aliasing = match (avg, one) {
+        (Some(a), Some(o)) => {
+            let d = o.rel_mse - a.rel_mse;
+            if o.rel_mse > 0.0 {
+                format!("{} ({:.0}%)", num(d), 100.0 * d / o.rel_mse)
+            } else {
+                num(d)
+            }
+        }
+        _ => dash(),
+    };
+    [
+        spp,
+        opt(avg.and_then(|e| e.flux_ratio)),
+        opt(avg.and_then(|e| e.flux_ratio_image)),
+        opt(avg.map(|e| e.rel_mse)),
+        opt(avg.and_then(|e| e.rel_mse_after_flux)),
+        opt(avg.and_then(|e| e.hdr_flip)),
+        opt(avg.and_then(|e| e.hdr_flip_after_flux)),
+        flip(avg),
+        opt(one.map(|e| e.rel_mse)),
+        opt(one.and_then(|e| e.hdr_flip)),
+        flip(one),
+        aliasing,
+        opt(avg.map(|e| e.rmse)),
+        opt(one.map(|e| e.rmse)),
+        opt(avg.map(|e| e.best_scale)),
+        opt(avg.map(|e| e.rmse_after_best_scale)),
+    ]
+}
+
+/// The markdown summary: one table per group (cost and surface errors), a volume table
+/// beside it when a run of the group has volume errors, skipped and failed runs listed.
 pub fn markdown(s: &Summary, plots: &[String]) -> String {
     let mut md = String::new();
     let _ = writeln!(md, "# {}\n", s.experiment);
@@ -398,10 +586,20 @@ pub fn markdown(s: &Summary, plots: &[String]) -> String {
     );
     let _ = writeln!(
         md,
-        "GPU ms: median (p10–p90) over the measured frames. Errors of the surface caustic \
-         image against the CPU reference: RMSE and FLIP as measured, and after the best \
-         single brightness factor `s` (a normalization error vanishes there, a shape error \
-         does not); σ_ref is the reference's own noise RMS.\n"
+        "GPU ms: median (p10–p90) over the measured frames (one sample per pixel). Errors \
+         against the CPU reference, energy before shape: **flux** = method ÷ reference \
+         luminance over the reference's caustic region (and over the whole image), 1 = all \
+         the light is there; **relMSE** and **HDR-FLIP** (exposure-bracketed, Andersson et \
+         al. 2021) as measured and after dividing the image by its whole-image flux ratio \
+         (a brightness error vanishes there, a shape error does not); **LDR-FLIP** at the \
+         exposure after `@`. These are scored on a frame averaging `spp` stratified \
+         sub-pixel camera offsets, the reference's pixel-area footprint; the `1spp` columns \
+         are the timed frame's own errors (one sample at each pixel centre), and \
+         **aliasing** = relMSE 1spp − relMSE (in % of relMSE 1spp) is the share of the \
+         real-time error due to camera aliasing. Runs of schema-1 result files were scored \
+         at 1 spp only: their pixel-averaged columns are empty. Diagnostics last: RMSE \
+         (linear HDR, set by the brightest pixel), the least-squares brightness factor `s` \
+         and RMSE after it (set by the focus); σ_ref is the reference's own noise RMS.\n"
     );
     if !s.missing_references.is_empty() {
         let _ = writeln!(
@@ -420,6 +618,11 @@ pub fn markdown(s: &Summary, plots: &[String]) -> String {
             groups.push(&r.group);
         }
     }
+    let head_rule = |md: &mut String, head: &str| {
+        let _ = writeln!(md, "{head}");
+        let cols = head.matches('|').count() - 1;
+        let _ = writeln!(md, "|{}", "---|".repeat(cols));
+    };
     for g in groups {
         let rows: Vec<&Row> = s
             .runs
@@ -430,31 +633,27 @@ pub fn markdown(s: &Summary, plots: &[String]) -> String {
             continue;
         }
         let _ = writeln!(md, "## {g}\n");
-        let mut head = "| scene | method | params | size | method GPU ms | frame GPU ms | fragments | counters | RMSE | FLIP | s | RMSE·s | FLIP·s | σ_ref |".to_string();
+        let mut head = format!(
+            "| scene | method | params | size | method GPU ms | frame GPU ms | fragments | counters | {} | σ_ref |",
+            ERROR_COLUMNS.join(" | ")
+        );
         if let Some(p) = paper_col {
             let _ = write!(head, " paper ({}) |", p.hardware);
         }
-        let _ = writeln!(md, "{head}");
-        let cols = head.matches('|').count() - 1;
-        let _ = writeln!(md, "|{}", "---|".repeat(cols));
-        for r in rows {
+        head_rule(&mut md, &head);
+        for r in &rows {
             let counters = r
                 .counters
                 .iter()
                 .map(|(k, v)| format!("{k} {v}"))
                 .collect::<Vec<_>>()
                 .join(", ");
-            let errs = match &r.errors {
-                Some(e) => format!(
-                    "{} | {} | {} | {} | {}",
-                    num(e.rmse),
-                    num(e.flip),
-                    num(e.best_scale),
-                    num(e.rmse_after_best_scale),
-                    e.flip_after_best_scale.map(num).unwrap_or("–".into())
-                ),
-                None => "– | – | – | – | –".into(),
-            };
+            let errs = error_cells(
+                r.score_spp,
+                r.errors.as_ref(),
+                r.errors_1spp.as_ref(),
+                r.exposure_scale,
+            );
             let _ = write!(
                 md,
                 "| {} | {} | {} | {}×{} | {} | {} | {} | {} | {} | {} |",
@@ -467,7 +666,7 @@ pub fn markdown(s: &Summary, plots: &[String]) -> String {
                 ms(&r.frame_gpu_ms),
                 r.fragments.map(|f| f.to_string()).unwrap_or("–".into()),
                 counters,
-                errs,
+                errs.join(" | "),
                 r.reference_noise_rms.map(num).unwrap_or("–".into())
             );
             if paper_col.is_some() {
@@ -476,6 +675,37 @@ pub fn markdown(s: &Summary, plots: &[String]) -> String {
             let _ = writeln!(md);
         }
         let _ = writeln!(md);
+        let volume: Vec<&&Row> = rows
+            .iter()
+            .filter(|r| r.volume_errors.is_some() || r.volume_errors_1spp.is_some())
+            .collect();
+        if !volume.is_empty() {
+            let _ = writeln!(md, "### {g}: volume caustic\n");
+            head_rule(
+                &mut md,
+                &format!(
+                    "| scene | method | params | {} |",
+                    ERROR_COLUMNS.join(" | ")
+                ),
+            );
+            for r in volume {
+                let errs = error_cells(
+                    r.score_spp,
+                    r.volume_errors.as_ref(),
+                    r.volume_errors_1spp.as_ref(),
+                    r.volume_exposure_scale,
+                );
+                let _ = writeln!(
+                    md,
+                    "| {} | {} | {} | {} |",
+                    r.scene,
+                    r.method,
+                    params_cell(&r.params),
+                    errs.join(" | ")
+                );
+            }
+            let _ = writeln!(md);
+        }
     }
     if let Some(p) = &s.paper {
         let _ = writeln!(
@@ -506,4 +736,150 @@ pub fn markdown(s: &Summary, plots: &[String]) -> String {
         }
     }
     md
+}
+
+/// A done run with no figures, for tests.
+#[cfg(test)]
+pub(crate) fn test_row(method: &str) -> Row {
+    Row {
+        index: 0,
+        key: format!("s/{method}/default"),
+        group: "g".into(),
+        scene: "s".into(),
+        method: method.into(),
+        params: Default::default(),
+        width: 32,
+        height: 24,
+        status: "done".into(),
+        reason: None,
+        dir: None,
+        method_gpu_ms: None,
+        frame_gpu_ms: None,
+        fragments: None,
+        fill_total: None,
+        counters: Default::default(),
+        score_spp: None,
+        errors: None,
+        errors_1spp: None,
+        volume_errors: None,
+        volume_errors_1spp: None,
+        exposure_scale: None,
+        volume_exposure_scale: None,
+        fill_max: None,
+        reference_noise_rms: None,
+        paper: vec![],
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn errors(rel_mse: f64, hdr_flip: Option<f64>) -> caustics_metrics::Errors {
+        caustics_metrics::Errors {
+            rmse: 0.1,
+            rel_mse,
+            psnr_db: 30.0,
+            ssim: 0.9,
+            flip: 0.02,
+            best_scale: 1.5,
+            rmse_after_best_scale: 0.08,
+            rel_mse_after_best_scale: None,
+            flip_after_best_scale: None,
+            flux_ratio: hdr_flip.map(|_| 0.97),
+            flux_ratio_image: hdr_flip.map(|_| 0.99),
+            rel_mse_after_flux: hdr_flip.map(|_| 0.5 * rel_mse),
+            hdr_flip,
+            hdr_flip_after_flux: hdr_flip.map(|f| 0.9 * f),
+            hdr_flip_start_exposure: None,
+            hdr_flip_stop_exposure: None,
+        }
+    }
+
+    fn summary(runs: Vec<Row>) -> Summary {
+        Summary {
+            schema_version: 1,
+            experiment: "x".into(),
+            description: String::new(),
+            scale: 1.0,
+            adapters: vec![],
+            commits: vec![],
+            profiles: vec![],
+            paper: None,
+            done: runs.len(),
+            skipped: 0,
+            failed: 0,
+            missing_references: vec![],
+            runs,
+        }
+    }
+
+    #[test]
+    fn schema_2_runs_lead_with_flux_and_shape_and_show_the_aliasing_share() {
+        let mut r = test_row("m");
+        r.score_spp = Some(16);
+        r.errors = Some(errors(0.01, Some(0.05)));
+        r.errors_1spp = Some(errors(0.04, Some(0.08)));
+        r.volume_errors = Some(errors(0.002, Some(0.03)));
+        r.volume_errors_1spp = Some(errors(0.003, Some(0.04)));
+        r.exposure_scale = Some(2.0);
+        let s = summary(vec![r]);
+        let b = bmf(&s);
+        let m = &b["x/s/m/default"];
+        for (k, v) in [
+            ("rel_mse", 0.01),
+            ("rel_mse_1spp", 0.04),
+            ("hdr_flip", 0.05),
+            ("hdr_flip_1spp", 0.08),
+            ("flux_ratio", 0.97),
+            ("rel_mse_after_flux", 0.005),
+            ("volume_rel_mse", 0.002),
+            ("volume_hdr_flip", 0.03),
+            ("volume_flux_ratio", 0.97),
+            ("volume_rel_mse_1spp", 0.003),
+            ("rel_mse_aliasing", 0.03),
+            ("rmse", 0.1),
+            ("best_scale", 1.5),
+        ] {
+            let got = m[k]["value"].as_f64().unwrap_or(f64::NAN);
+            assert!((got - v).abs() < 1e-12, "{k}: {got} != {v} in {m}");
+        }
+        let md = markdown(&s, &[]);
+        let head = md
+            .lines()
+            .find(|l| l.starts_with("| scene | method | params | size"))
+            .expect("head");
+        let at = |c: &str| {
+            head.find(c)
+                .unwrap_or_else(|| panic!("{c} missing: {head}"))
+        };
+        assert!(
+            at("| flux |") < at("| relMSE |") && at("| HDR-FLIP |") < at("| RMSE |"),
+            "{head}"
+        );
+        assert!(md.contains("| 16 | 0.9700 | 0.9900 | 0.0100 | 0.0050 | 0.0500 | 0.0450 | 0.0200 @2 | 0.0400 | 0.0800 | 0.0200 @2 | 0.0300 (75%) |"), "{md}");
+        assert!(md.contains("### g: volume caustic"), "{md}");
+    }
+
+    #[test]
+    fn schema_1_runs_show_1spp_errors_only() {
+        let mut r = test_row("m");
+        r.errors_1spp = Some(errors(0.04, None));
+        let s = summary(vec![r]);
+        let b = bmf(&s);
+        let m = b["x/s/m/default"].as_object().expect("object");
+        assert!(
+            m.contains_key("rel_mse_1spp") && m.contains_key("rmse_1spp"),
+            "{m:?}"
+        );
+        assert!(
+            !m.contains_key("rel_mse") && !m.contains_key("rmse"),
+            "{m:?}"
+        );
+        let md = markdown(&s, &[]);
+        assert!(md.contains("| 1 only (schema 1) | – | – | – |"), "{md}");
+        assert!(!md.contains("volume caustic\n"), "{md}");
+        assert_eq!(s.runs[0].measure("rel_mse_1spp"), Some(0.04));
+        assert_eq!(s.runs[0].measure("rel_mse"), None);
+    }
 }

@@ -1,6 +1,9 @@
 //! The regression gate is itself tested (STYLE 6): it flags a 10% slowdown outside the
-//! noise, a changed fragment count and a worse error, does not flag identical runs or a
-//! change inside the noise, and refuses bad folders clearly without writing anything.
+//! noise, a changed fragment count and a worse error (surface and volume, relMSE,
+//! HDR-FLIP, flux ratio), does not flag identical runs or a change inside the noise,
+//! compares pixel-averaged errors only with pixel-averaged ones (a schema-1 file against
+//! a schema-2 one: the 1-spp errors only), and refuses bad folders clearly without
+//! writing anything.
 
 use std::path::Path;
 use std::process::Command;
@@ -16,6 +19,73 @@ fn template() -> Value {
         serde_json::from_str(&std::fs::read_to_string(&p).expect("template")).expect("json");
     set_times(&mut v, 10.0, 1.0);
     v
+}
+
+/// A schema-2 result made from a real schema-1 file with volume errors (fog_sphere,
+/// static-grid, 48×36): its errors become the 1-spp errors, and synthetic pixel-averaged
+/// errors (smaller, as a 4×4 scoring frame gives) with every schema-2 figure go under
+/// `errors`.
+fn template_v2() -> Value {
+    let mut v = template_v1_volume();
+    let one = v["errors"].clone();
+    v["schema_version"] = 2.into();
+    v["scoring"] = serde_json::json!({"grid": 4, "samples_per_pixel": 16, "wall_ms": 12.5});
+    v["errors_1spp"] = one;
+    for (which, e) in [("errors_1spp", 1.0), ("errors", 0.6)] {
+        for (part, flux) in [("surface", 0.97), ("volume", 1.04)] {
+            let x = &mut v[which][part];
+            for k in ["rmse", "rel_mse", "flip", "rmse_after_best_scale"] {
+                x[k] = (x[k].as_f64().expect(k) * e).into();
+            }
+            x["flux_ratio"] = flux.into();
+            x["flux_ratio_image"] = (flux + 0.01).into();
+            x["rel_mse_after_flux"] = (0.8 * e * x["rel_mse"].as_f64().expect("rel")).into();
+            x["hdr_flip"] = (0.05 * e).into();
+            x["hdr_flip_after_flux"] = (0.045 * e).into();
+            x["hdr_flip_start_exposure"] = (-3.0).into();
+            x["hdr_flip_stop_exposure"] = 4.5.into();
+        }
+    }
+    v
+}
+
+/// The schema-1 file `template_v2` starts from.
+fn template_v1_volume() -> Value {
+    let p = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../results/reproduce/ci-smoke/runs/default/fog_sphere/static-grid/result.json");
+    let mut v: Value =
+        serde_json::from_str(&std::fs::read_to_string(&p).expect("template")).expect("json");
+    assert_eq!(v["schema_version"], 1, "the fixture is a schema-1 file");
+    assert!(
+        v["errors"]["volume"].is_object(),
+        "the fixture has volume errors"
+    );
+    set_times(&mut v, 10.0, 1.0);
+    v
+}
+
+fn lines_of(a: &CompareArgs) -> Vec<(String, Verdict)> {
+    compare(a)
+        .expect("compare")
+        .lines
+        .into_iter()
+        .map(|l| (l.measure, l.verdict))
+        .collect()
+}
+
+fn exit_code(a: &CompareArgs) -> (Option<i32>, String) {
+    let o = Command::new(env!("CARGO_BIN_EXE_caustics"))
+        .args([
+            "compare",
+            a.base.to_str().expect("utf8"),
+            a.new.to_str().expect("utf8"),
+        ])
+        .output()
+        .expect("run");
+    (
+        o.status.code(),
+        String::from_utf8_lossy(&o.stdout).into_owned(),
+    )
 }
 
 /// Deterministic "noisy" frame times around `centre` × `scale`: ±1% jitter.
@@ -175,24 +245,182 @@ fn a_changed_fragment_count_or_counter_is_flagged() {
 
 #[test]
 fn errors_are_gated_against_the_reference_noise() {
-    let base = template();
+    let mut base = template_v2();
     let rmse = base["errors"]["surface"]["rmse"].as_f64().expect("rmse");
-    let noise = base["errors"]["reference_noise_rms"]
-        .as_f64()
-        .expect("noise");
-    // Inside half the reference noise: no change.
+    // A noisy reference: σ_ref = 20% of the RMSE.
+    let noise = 0.2 * rmse;
+    base["errors"]["reference_noise_rms"] = noise.into();
+    // Inside half the reference noise (and above the 2% relative tolerance): no change.
     let mut within = base.clone();
     within["errors"]["surface"]["rmse"] = (rmse + 0.4 * noise).into();
     let (_t, a) = pair(&base, &within);
     assert!(regressions_in(&a).is_empty());
     // Beyond it: worse.
     let mut worse = base.clone();
-    worse["errors"]["surface"]["rmse"] = (rmse + 2.0 * noise).into();
+    worse["errors"]["surface"]["rmse"] = (rmse + 2.0 * noise + 0.1 * rmse).into();
     worse["errors"]["surface"]["flip"] = 0.2.into();
     let (_t, a) = pair(&base, &worse);
     let regs = regressions_in(&a);
     assert!(regs.contains(&"error RMSE".to_owned()), "{regs:?}");
     assert!(regs.contains(&"error FLIP".to_owned()), "{regs:?}");
+    // A schema-1 file's errors are its 1-spp errors, gated under that name.
+    let base = template();
+    let mut worse = base.clone();
+    worse["errors"]["surface"]["flip"] = 0.2.into();
+    let (_t, a) = pair(&base, &worse);
+    assert_eq!(regressions_in(&a), vec!["error 1spp FLIP".to_owned()]);
+}
+
+#[test]
+fn equal_files_compare_equal_on_every_error_figure() {
+    let v = template_v2();
+    let (_t, a) = pair(&v, &v);
+    let lines = lines_of(&a);
+    assert!(lines.iter().all(|l| l.1 == Verdict::Same), "{lines:?}");
+    for m in [
+        "error relMSE",
+        "error HDR-FLIP",
+        "error flux ratio",
+        "error relMSE after flux",
+        "error volume relMSE",
+        "error volume HDR-FLIP",
+        "error volume flux ratio",
+        "error 1spp volume relMSE",
+        "error 1spp HDR-FLIP",
+    ] {
+        assert!(
+            lines.iter().any(|l| l.0 == m),
+            "{m} not compared: {lines:?}"
+        );
+    }
+    assert_eq!(exit_code(&a).0, Some(0));
+}
+
+#[test]
+fn a_synthetic_volume_regression_is_caught_with_exit_2() {
+    let base = template_v2();
+    let mut new = base.clone();
+    let v = &mut new["errors"]["volume"];
+    v["rel_mse"] = (1.5 * v["rel_mse"].as_f64().expect("rel")).into();
+    v["hdr_flip"] = 0.08.into();
+    let (_t, a) = pair(&base, &new);
+    assert_eq!(
+        regressions_in(&a),
+        vec![
+            "error volume relMSE".to_owned(),
+            "error volume HDR-FLIP".to_owned()
+        ]
+    );
+    let (code, stdout) = exit_code(&a);
+    assert_eq!(code, Some(2), "{stdout}");
+    assert!(stdout.contains("error volume relMSE"), "{stdout}");
+    // Volume errors gone from NEW: a regression too.
+    let mut gone = base.clone();
+    gone["errors"]["volume"] = Value::Null;
+    let (_t, a) = pair(&base, &gone);
+    assert_eq!(regressions_in(&a), vec!["error volume".to_owned()]);
+}
+
+#[test]
+fn a_surface_hdr_flip_regression_is_caught() {
+    let base = template_v2();
+    let set = |f: f64| {
+        let mut v = base.clone();
+        v["errors"]["surface"]["hdr_flip"] = (0.03 * f).into();
+        v
+    };
+    let base = set(1.0);
+    let (_t, a) = pair(&base, &set(1.1));
+    assert_eq!(regressions_in(&a), vec!["error HDR-FLIP".to_owned()]);
+    assert_eq!(exit_code(&a).0, Some(2));
+    // Within the 2% tolerance: the same; 10% lower: better.
+    let (_t, a) = pair(&base, &set(1.01));
+    assert!(regressions_in(&a).is_empty());
+    let (_t, a) = pair(&base, &set(0.9));
+    let lines = lines_of(&a);
+    assert!(
+        lines.contains(&("error HDR-FLIP".into(), Verdict::Better)),
+        "{lines:?}"
+    );
+}
+
+#[test]
+fn a_flux_ratio_is_worse_when_it_moves_away_from_one() {
+    let base = template_v2(); // surface flux ratio 0.97
+    let with = |f: f64| {
+        let mut v = base.clone();
+        v["errors"]["surface"]["flux_ratio"] = f.into();
+        v
+    };
+    let verdict = |f: f64| {
+        let (_t, a) = pair(&base, &with(f));
+        lines_of(&a)
+            .into_iter()
+            .find(|l| l.0 == "error flux ratio")
+            .expect("flux compared")
+            .1
+    };
+    assert_eq!(verdict(0.90), Verdict::Regression, "7% less light");
+    assert_eq!(
+        verdict(1.06),
+        Verdict::Regression,
+        "overshoot further from 1"
+    );
+    assert_eq!(verdict(1.0), Verdict::Better);
+    assert_eq!(verdict(0.98), Verdict::Same, "|Δ| inside the tolerance");
+}
+
+#[test]
+fn schema_1_against_schema_2_compares_the_1spp_errors_only() {
+    let v1 = template_v1_volume();
+    let v2 = template_v2();
+    for (base, new) in [(&v1, &v2), (&v2, &v1)] {
+        let (_t, a) = pair(base, new);
+        let r = compare(&a).expect("compare");
+        assert_eq!(r.regressions(), 0, "{}", r.table(true));
+        let info = r
+            .lines
+            .iter()
+            .find(|l| l.measure == "errors (pixel-averaged)")
+            .expect("an Info line says what was compared");
+        assert_eq!(info.verdict, Verdict::Info);
+        assert!(info.change.contains("1-spp"), "{}", info.change);
+        // Nothing pixel-averaged is compared with anything 1-spp.
+        assert!(
+            r.lines
+                .iter()
+                .filter(|l| l.measure.starts_with("error "))
+                .all(|l| l.measure.starts_with("error 1spp ")),
+            "{}",
+            r.table(true)
+        );
+        assert!(
+            r.lines
+                .iter()
+                .any(|l| l.measure == "error 1spp volume relMSE" && l.verdict == Verdict::Same),
+            "{}",
+            r.table(true)
+        );
+    }
+    // The 1-spp errors are still gated across the schemas.
+    let mut worse = v2.clone();
+    worse["errors_1spp"]["volume"]["rel_mse"] = 0.5.into();
+    let (_t, a) = pair(&v1, &worse);
+    assert_eq!(
+        regressions_in(&a),
+        vec!["error 1spp volume relMSE".to_owned()]
+    );
+    // Pixel-averaged errors of other sample counts are not compared either.
+    let mut other = v2.clone();
+    other["scoring"]["samples_per_pixel"] = 4.into();
+    other["errors"]["surface"]["rel_mse"] = 1.0.into();
+    let (_t, a) = pair(&v2, &other);
+    let lines = lines_of(&a);
+    assert!(
+        lines.contains(&("errors (pixel-averaged)".into(), Verdict::Info)),
+        "{lines:?}"
+    );
+    assert!(regressions_in(&a).is_empty(), "{lines:?}");
 }
 
 #[test]

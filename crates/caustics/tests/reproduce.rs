@@ -115,6 +115,7 @@ fn reproduce_then_shards_merged_equal_the_unsharded_run() {
     assert!(md.contains("water_pool/pinhole/default | skipped"), "{md}");
     for p in [
         "plots/error_vs_time_ring.png",
+        "plots/hdr_flip_vs_time_ring.png",
         "plots/fragments.png",
         "bmf.json",
     ] {
@@ -128,6 +129,22 @@ fn reproduce_then_shards_merged_equal_the_unsharded_run() {
         m["method_gpu_ms"]["lower_value"].as_f64() <= m["method_gpu_ms"]["upper_value"].as_f64()
     );
     assert!(m["fragments"]["value"].is_number() && m["rmse_after_best_scale"]["value"].is_number());
+    // The headline figures of the pixel-averaged frame, and the timed frame's beside them.
+    for k in [
+        "flux_ratio",
+        "rel_mse",
+        "rel_mse_after_flux",
+        "hdr_flip",
+        "rel_mse_1spp",
+        "hdr_flip_1spp",
+        "rel_mse_aliasing",
+    ] {
+        assert!(m[k]["value"].is_number(), "{k} missing: {m}");
+    }
+    assert!(
+        md.contains("| spp | flux | flux (image) | relMSE |") && md.contains("aliasing"),
+        "{md}"
+    );
     // EXRs are dropped by default, PNGs kept.
     let run = dir.join(ring50.dir.as_deref().expect("dir"));
     assert!(run.join("composite.png").is_file() && !run.join("surface.exr").exists());
