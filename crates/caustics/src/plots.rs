@@ -17,8 +17,7 @@ use std::path::Path;
 
 use anyhow::{Result, anyhow};
 use caustics_metrics::{
-    HeatmapOptions, Rgb8Image, ZERO_COUNT_COLOUR, draw_text, draw_text_vertical, heatmap_with,
-    inferno, text_width,
+    HeatmapOptions, Rgb8Image, draw_text, draw_text_vertical, heatmap_with, text_width,
 };
 use plotters::prelude::*;
 
@@ -425,49 +424,6 @@ pub fn error_axes() -> [ErrorAxis; 4] {
     ]
 }
 
-/// The per-pixel counts behind a run's own `fill_heatmap.png` (linear inferno scale from 0
-/// to `max`, its largest count; zero counts black), read back from its colours: a run
-/// keeps no raw counts. Exact while the colours of `1..=max` are distinct (`max` up to a
-/// few hundred); above that, a colour stands for a run of counts and gives their middle,
-/// so a count is known to about `max / 500`.
-pub fn counts_from_heatmap(img: &Rgb8Image, width: u32, height: u32, max: u32) -> Option<Vec<u32>> {
-    if img.width < width || img.height < height {
-        return None;
-    }
-    // Colour -> (smallest, largest) count drawn with it.
-    let mut table: std::collections::HashMap<[u8; 3], (u32, u32)> =
-        std::collections::HashMap::new();
-    for c in 1..=max {
-        let e = table
-            .entry(inferno((f64::from(c) / f64::from(max)) as f32))
-            .or_insert((c, c));
-        e.1 = c;
-    }
-    let mut out = Vec::with_capacity((width * height) as usize);
-    for y in 0..height {
-        for x in 0..width {
-            let p = img.get(x, y);
-            if p == ZERO_COUNT_COLOUR || max == 0 {
-                out.push(0);
-                continue;
-            }
-            let (lo, hi) = match table.get(&p) {
-                Some(r) => *r,
-                None => *table
-                    .iter()
-                    .min_by_key(|(k, _)| {
-                        (0..3)
-                            .map(|i| (i32::from(k[i]) - i32::from(p[i])).pow(2))
-                            .sum::<i32>()
-                    })
-                    .map(|(_, v)| v)?,
-            };
-            out.push(lo + (hi - lo) / 2);
-        }
-    }
-    Some(out)
-}
-
 /// Writes the plots of `s` into `dir`; returns their paths relative to the summary.
 pub fn write_plots(dir: &Path, s: &Summary) -> Result<Vec<String>> {
     let mut written = Vec::new();
@@ -594,10 +550,10 @@ pub fn write_plots(dir: &Path, s: &Summary) -> Result<Vec<String>> {
                 .iter()
                 .filter(|r| &r.scene == scene)
                 .filter_map(|r| {
-                    let p = root.join(r.dir.as_ref()?).join("fill_heatmap.png");
-                    let img = caustics_metrics::read_png(&p).ok()?;
-                    let counts = counts_from_heatmap(&img, r.width, r.height, r.fill_max?)?;
-                    Some((bar_label(r), counts, r.width, r.height))
+                    // Runs made before `fill_counts.png` existed have no exact counts.
+                    let p = root.join(r.dir.as_ref()?).join("fill_counts.png");
+                    let (counts, w, h) = caustics_metrics::read_counts_png(&p).ok()?;
+                    Some((bar_label(r), counts, w, h))
                 })
                 .collect();
             if panels.len() < 2 {
@@ -654,6 +610,7 @@ pub fn write_plots(dir: &Path, s: &Summary) -> Result<Vec<String>> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use caustics_metrics::inferno;
 
     #[test]
     fn pareto_front_keeps_only_unbeaten_runs() {
@@ -696,24 +653,6 @@ mod tests {
         assert!(img.pixels.contains(&INK), "no text or frame drawn");
     }
 
-    #[test]
-    fn heatmap_counts_read_back_from_their_colours() {
-        let (w, h) = (9u32, 5u32);
-        let small: Vec<u32> = (0..w * h).map(|i| (i * 7) % 40).collect();
-        let img = caustics_metrics::heatmap(&small, w, h, "t").expect("heatmap");
-        let back = counts_from_heatmap(&img, w, h, 39).expect("decode");
-        assert_eq!(back, small, "exact while colours are distinct");
-        // A large maximum: each count known to about max / 500.
-        let large: Vec<u32> = (0..w * h).map(|i| (i * 997) % 5001).collect();
-        let max = *large.iter().max().expect("max");
-        let img = caustics_metrics::heatmap(&large, w, h, "t").expect("heatmap");
-        let back = counts_from_heatmap(&img, w, h, max).expect("decode");
-        for (a, b) in large.iter().zip(&back) {
-            assert!(a.abs_diff(*b) <= max / 100, "{a} read back as {b}");
-            assert_eq!(*a == 0, *b == 0, "zero counts stay zero");
-        }
-    }
-
     fn row(dir: &str, method: &str, max: u32) -> Row {
         let mut r = crate::summary::test_row(method);
         r.width = 8;
@@ -729,10 +668,14 @@ mod tests {
         // Run a's counts top out at 10, run b's at 100.
         for (d, max) in [("a", 10u32), ("b", 100)] {
             let counts: Vec<u32> = (0..32).map(|i| if i == 0 { max } else { i % 3 }).collect();
-            let img = caustics_metrics::heatmap(&counts, 8, 4, "own").expect("heatmap");
             std::fs::create_dir_all(tmp.path().join(d)).expect("mkdir");
-            caustics_metrics::write_png(&tmp.path().join(d).join("fill_heatmap.png"), &img)
-                .expect("png");
+            caustics_metrics::write_counts_png(
+                &tmp.path().join(d).join("fill_counts.png"),
+                &counts,
+                8,
+                4,
+            )
+            .expect("png");
         }
         let s = Summary {
             schema_version: 1,

@@ -280,6 +280,9 @@ pub fn run_scene(o: &RunOptions, scene: Scene) -> Result<RunOutcome> {
         let heat = caustics_metrics::heatmap(&fill, w, h, &format!("{} fragments/px", o.method))?;
         caustics_metrics::write_png(&dir.join("fill_heatmap.png"), &heat)?;
         images.insert("fill_heatmap".into(), "fill_heatmap.png".into());
+        // The exact counts, for figures that put several runs on one colour scale.
+        caustics_metrics::write_counts_png(&dir.join("fill_counts.png"), &fill, w, h)?;
+        images.insert("fill_counts".into(), "fill_counts.png".into());
     }
     let (errors, errors_1spp) = match &reference {
         Some(r) => {

@@ -21,7 +21,10 @@ fn every_method_repeats_its_timed_frame_at_the_pixel_centre() {
             let scene = caustics_scene::Scene::load(p).expect("scene");
             info.supports(&scene, &serde_json::Value::Null).is_ok()
         }) else {
-            panic!("{} renders neither sphere_on_plane nor fog_sphere", info.name);
+            panic!(
+                "{} renders neither sphere_on_plane nor fog_sphere",
+                info.name
+            );
         };
         let mut o = run_options(scene, &tmp.path().join("runs"), info.name, &[]);
         (o.warmup, o.frames, o.score_grid) = (1, 2, 1);

@@ -189,6 +189,68 @@ pub fn read_png(path: &Path) -> Result<Rgb8Image, MetricsError> {
     })
 }
 
+/// Largest per-pixel count [`write_counts_png`] stores exactly (16-bit grey).
+pub const MAX_PNG_COUNT: u32 = u16::MAX as u32;
+
+/// Writes per-pixel counts (row-major, row 0 at the top) as a 16-bit greyscale PNG:
+/// lossless and compressed, so figures drawn later from several runs (shared-scale
+/// heatmaps) read the exact counts back with [`read_counts_png`]. Counts above
+/// [`MAX_PNG_COUNT`] are refused, never clipped silently.
+pub fn write_counts_png(
+    path: &Path,
+    counts: &[u32],
+    width: u32,
+    height: u32,
+) -> Result<(), MetricsError> {
+    use image::ImageEncoder;
+    check_buffer(counts.len(), width, height, "counts to write")?;
+    let mut bytes = Vec::with_capacity(counts.len() * 2);
+    for (i, &c) in counts.iter().enumerate() {
+        let v = u16::try_from(c).map_err(|_| MetricsError::InvalidParameter {
+            name: "counts",
+            message: format!(
+                "pixel ({}, {}) holds {c}, above the {MAX_PNG_COUNT} a 16-bit PNG stores",
+                i as u32 % width.max(1),
+                i as u32 / width.max(1)
+            ),
+        })?;
+        // PNG stores 16-bit samples big-endian.
+        bytes.extend_from_slice(&v.to_be_bytes());
+    }
+    let mut buf = Vec::new();
+    image::codecs::png::PngEncoder::new(&mut buf)
+        .write_image(&bytes, width, height, image::ExtendedColorType::L16)
+        .map_err(|e| MetricsError::Png {
+            path: path.to_owned(),
+            message: e.to_string(),
+        })?;
+    atomic_write(path, &buf)
+}
+
+/// Reads counts written by [`write_counts_png`]: `(counts, width, height)`.
+pub fn read_counts_png(path: &Path) -> Result<(Vec<u32>, u32, u32), MetricsError> {
+    let bytes = fs::read(path).map_err(|e| MetricsError::io(path, e))?;
+    let decoded =
+        image::load_from_memory_with_format(&bytes, image::ImageFormat::Png).map_err(|e| {
+            MetricsError::Png {
+                path: path.to_owned(),
+                message: e.to_string(),
+            }
+        })?;
+    let image::DynamicImage::ImageLuma16(grey) = decoded else {
+        return Err(MetricsError::Png {
+            path: path.to_owned(),
+            message: "expected a 16-bit greyscale PNG of counts".to_owned(),
+        });
+    };
+    let (width, height) = grey.dimensions();
+    Ok((
+        grey.into_raw().into_iter().map(u32::from).collect(),
+        width,
+        height,
+    ))
+}
+
 fn check_buffer(len: usize, width: u32, height: u32, what: &str) -> Result<(), MetricsError> {
     let expected = crate::image::pixel_count(width, height);
     if len != expected {

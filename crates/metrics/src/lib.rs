@@ -67,6 +67,9 @@ pub use crate::heatmap::{
     format_value, heatmap, heatmap_with, histogram,
 };
 pub use crate::image::{HdrImage, REC709_LUMINANCE, Rgb8Image, luminance};
-pub use crate::io::{atomic_write, atomic_write_with, read_exr, read_png, write_exr, write_png};
+pub use crate::io::{
+    MAX_PNG_COUNT, atomic_write, atomic_write_with, read_counts_png, read_exr, read_png,
+    write_counts_png, write_exr, write_png,
+};
 pub use crate::ssim::{ssim, ssim_with_range};
 pub use crate::tonemap::{ToneMap, srgb_oetf};

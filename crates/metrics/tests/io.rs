@@ -181,3 +181,22 @@ fn image_helpers() {
         Err(MetricsError::NonFinite { ref image, x: 1, y: 0, .. }) if image == "composite"
     ));
 }
+
+#[test]
+fn counts_png_round_trip_is_exact_and_refuses_what_it_cannot_store() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let path = tmp.path().join("fill_counts.png");
+    let counts: Vec<u32> = (0..12u32).map(|i| i * 5000 + i).collect();
+    caustics_metrics::write_counts_png(&path, &counts, 4, 3).expect("write");
+    let (back, w, h) = caustics_metrics::read_counts_png(&path).expect("read");
+    assert_eq!((w, h), (4, 3));
+    assert_eq!(back, counts);
+    let too_big = [0, caustics_metrics::MAX_PNG_COUNT + 1];
+    let e = caustics_metrics::write_counts_png(&tmp.path().join("big.png"), &too_big, 2, 1)
+        .expect_err("65536 does not fit");
+    assert!(e.to_string().contains("65536"), "{e}");
+    // An 8-bit colour PNG is not a counts file.
+    let rgb = caustics_metrics::Rgb8Image::new(2, 2);
+    caustics_metrics::write_png(&tmp.path().join("rgb.png"), &rgb).expect("rgb");
+    assert!(caustics_metrics::read_counts_png(&tmp.path().join("rgb.png")).is_err());
+}
