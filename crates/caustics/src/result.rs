@@ -202,7 +202,7 @@ pub struct Memory {
 pub struct ToneMapInfo {
     /// Linear radiance is multiplied by this, clamped to [0, 1], then sRGB-encoded.
     pub exposure_scale: f32,
-    /// Where the exposure came from: "--exposure", "reference p99" (the reference
+    /// Where the exposure came from: "--exposure", "scene camera.exposure", "reference p99" (the reference
     /// surface caustic's 99th-percentile luminance maps to 1), or "image p99" (no
     /// reference: the run's own composite). Absent in files before it existed.
     #[serde(default, skip_serializing_if = "Option::is_none")]

@@ -246,8 +246,9 @@ pub fn run_scene(o: &RunOptions, scene: Scene) -> Result<RunOutcome> {
     let dir = o.out.join(&scene.name).join(&o.method);
     std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
     let composite = direct.add(&surface)?.add(&volume)?;
-    let (tone, tone_source) = match (o.exposure, &reference) {
-        (Some(e), _) => (ToneMap::new(e), "--exposure"),
+    let (tone, tone_source) = match (o.exposure.or(scene.camera.exposure), &reference) {
+        (Some(e), _) if o.exposure.is_some() => (ToneMap::new(e), "--exposure"),
+        (Some(e), _) => (ToneMap::new(e), "scene camera.exposure"),
         (None, Some(r)) => (
             ToneMap::fit_percentile(&r.surface, EXPOSURE_PERCENTILE),
             "reference p99",

@@ -49,10 +49,11 @@ fn template_v2() -> Value {
     v
 }
 
-/// The schema-1 file `template_v2` starts from.
+/// The schema-1 file `template_v2` starts from: `ci-smoke`'s fog_sphere/static-grid run as
+/// committed at 72437bc (a frozen copy, so re-running the experiment leaves the test alone).
 fn template_v1_volume() -> Value {
     let p = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../results/reproduce/ci-smoke/runs/default/fog_sphere/static-grid/result.json");
+        .join("tests/data/result_v1_fog_sphere_static_grid.json");
     let mut v: Value =
         serde_json::from_str(&std::fs::read_to_string(&p).expect("template")).expect("json");
     assert_eq!(v["schema_version"], 1, "the fixture is a schema-1 file");

@@ -136,6 +136,7 @@ mod tests {
             fov_y_deg: 50.0,
             width: 64,
             height: 48,
+            exposure: None,
         }
     }
 
@@ -162,6 +163,7 @@ mod tests {
             fov_y_deg: 60.0,
             width: 8,
             height: 6,
+            exposure: None,
         };
         let s = Sensor::new(&cam);
         let n = 800;

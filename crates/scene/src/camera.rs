@@ -21,6 +21,9 @@ pub struct Camera {
     pub width: u32,
     /// Image height in pixels.
     pub height: u32,
+    /// Exposure scale of the tone-mapped images (linear × exposure, clamped, sRGB), when
+    /// the scene file states one; otherwise the harness takes it from the reference.
+    pub exposure: Option<f32>,
 }
 
 impl Camera {

@@ -46,6 +46,8 @@ pub(crate) struct RawCamera {
     pub(crate) fov_y_deg: f32,
     pub(crate) width: u32,
     pub(crate) height: u32,
+    #[serde(default)]
+    pub(crate) exposure: Option<f32>,
 }
 
 fn default_up() -> [f32; 3] {

@@ -211,6 +211,12 @@ impl Builder<'_> {
                 ),
             ));
         }
+        if let Some(e) = c.exposure.filter(|e| !(e.is_finite() && *e > 0.0)) {
+            return Err(self.err(
+                "camera.exposure",
+                format!("expected a positive number (an exposure scale), got {e}"),
+            ));
+        }
         Ok(Camera {
             eye,
             target,
@@ -218,6 +224,7 @@ impl Builder<'_> {
             fov_y_deg: fov,
             width: c.width,
             height: c.height,
+            exposure: c.exposure,
         })
     }
 

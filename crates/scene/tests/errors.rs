@@ -534,3 +534,20 @@ fn missing_scene_file_is_an_io_error() {
             .starts_with("/nonexistent/scene.json: cannot read")
     );
 }
+
+#[test]
+fn camera_exposure_is_optional_and_positive() {
+    assert_eq!(load(GOOD).expect("good").camera.exposure, None);
+    let s = load(&with("\"height\": 48", "\"height\": 48, \"exposure\": 0.5")).expect("exposure");
+    assert_eq!(s.camera.exposure, Some(0.5));
+    for bad in ["0", "-2", "\"bright\""] {
+        expect_err(
+            &with("\"height\": 48", &format!("\"height\": 48, \"exposure\": {bad}")),
+            &["camera"],
+        );
+    }
+    expect_err(
+        &with("\"height\": 48", "\"height\": 48, \"exposure\": -2"),
+        &["camera.exposure", "positive"],
+    );
+}

@@ -246,6 +246,7 @@ fn camera() -> Camera {
         fov_y_deg: 40.0,
         width: 1024,
         height: 768,
+        exposure: None,
     }
 }
 
