@@ -214,8 +214,8 @@ pub fn write_counts_png(
                 i as u32 / width.max(1)
             ),
         })?;
-        // PNG stores 16-bit samples big-endian.
-        bytes.extend_from_slice(&v.to_be_bytes());
+        // `image` takes 16-bit samples in native byte order (it writes PNG's big-endian).
+        bytes.extend_from_slice(&v.to_ne_bytes());
     }
     let mut buf = Vec::new();
     image::codecs::png::PngEncoder::new(&mut buf)
