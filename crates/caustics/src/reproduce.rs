@@ -340,10 +340,11 @@ fn run_one(e: &Experiment, spec: &RunSpec, args: &ReproduceArgs, out: &Path) -> 
         reason,
     };
     match run_scene(&o, spec.scene.clone()) {
-        Ok(RunOutcome::Done { dir, .. }) => {
+        Ok(RunOutcome::Done { dir, result }) => {
             if !args.keep_exr {
-                for f in ["surface.exr", "volume.exr", "direct.exr"] {
-                    let _ = std::fs::remove_file(dir.join(f));
+                // Every linear image the run wrote (large); the PNGs and result.json stay.
+                for file in result.images.values().filter(|f| f.ends_with(".exr")) {
+                    let _ = std::fs::remove_file(dir.join(file));
                 }
             }
             let rel = rel.join(&spec.scene.name).join(&spec.method);

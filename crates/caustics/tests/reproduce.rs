@@ -147,7 +147,13 @@ fn reproduce_then_shards_merged_equal_the_unsharded_run() {
     );
     // EXRs are dropped by default, PNGs kept.
     let run = dir.join(ring50.dir.as_deref().expect("dir"));
-    assert!(run.join("composite.png").is_file() && !run.join("surface.exr").exists());
+    assert!(run.join("composite.png").is_file());
+    let exr: Vec<_> = std::fs::read_dir(&run)
+        .expect("run folder")
+        .filter_map(|e| e.ok().map(|e| e.file_name()))
+        .filter(|n| n.to_string_lossy().ends_with(".exr"))
+        .collect();
+    assert!(exr.is_empty(), "EXRs left without --keep-exr: {exr:?}");
 
     // The summary can be rewritten from the files alone, identically.
     let before = std::fs::read(dir.join("summary.json")).expect("summary");

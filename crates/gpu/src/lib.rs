@@ -1,7 +1,9 @@
 //! Headless wgpu layer of caustics-bench: adapter choice, one scene upload, the
 //! camera and light G-buffers, direct lighting with shadows, the HDR radiance targets
 //! and the instrumentation (timestamps and pipeline statistics per named pass, fill
-//! counting per pixel) through which the harness measures every method alike.
+//! counting per pixel) through which the harness measures every method alike, and the
+//! scoring frames ([`scoring`]: sub-pixel camera offsets averaged on the GPU, so errors
+//! are taken at the reference's pixel footprint).
 //!
 //! ```no_run
 //! use caustics_gpu::{AdapterChoice, GpuContext, GpuScene, Renderer, RendererOptions, PassProfiler, FrameMode};
