@@ -542,7 +542,10 @@ fn camera_exposure_is_optional_and_positive() {
     assert_eq!(s.camera.exposure, Some(0.5));
     for bad in ["0", "-2", "\"bright\""] {
         expect_err(
-            &with("\"height\": 48", &format!("\"height\": 48, \"exposure\": {bad}")),
+            &with(
+                "\"height\": 48",
+                &format!("\"height\": 48, \"exposure\": {bad}"),
+            ),
             &["camera"],
         );
     }
