@@ -33,8 +33,16 @@ use crate::experiment::RunSpec;
 use crate::machine::Build;
 use crate::result::{RunResult, SCHEMA_VERSION};
 
-/// EXRs that `reproduce` drops after a run unless `--keep-exr`.
-pub const DROPPED_EXRS: [&str; 3] = ["surface.exr", "volume.exr", "direct.exr"];
+/// EXRs that `reproduce` drops after a run unless `--keep-exr` (every EXR `caustics run`
+/// writes: the timed frame's `*_1spp.exr` were left behind before, against the README's
+/// "EXRs only with `--keep-exr`").
+pub const DROPPED_EXRS: [&str; 5] = [
+    "surface.exr",
+    "volume.exr",
+    "direct.exr",
+    "surface_1spp.exr",
+    "volume_1spp.exr",
+];
 
 /// The files of an experiment folder that `reproduce` writes besides `runs/` and
 /// `plots/`; `manifest.json` is written last, so a folder without one is unfinished.

@@ -237,6 +237,12 @@ fn reproduce_killed_at_any_point_resumes_to_the_uninterrupted_result() {
     let err = String::from_utf8_lossy(&resumed.stderr);
     eprintln!("resumed: {}", err.lines().last().unwrap_or(""));
     assert!(out.join("manifest.json").is_file());
+    // EXRs only with --keep-exr (the timed frame's too).
+    let exrs: Vec<String> = tree(&out)
+        .into_keys()
+        .filter(|k| k.ends_with(".exr"))
+        .collect();
+    assert!(exrs.is_empty(), "{exrs:?}");
     // The uninterrupted run (the same reference cache, now complete).
     finish(&mut s.reproduce("b", &[]));
     let (ta, tb) = (tree(&out), tree(&s.root.join("b/killme")));
