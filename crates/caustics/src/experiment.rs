@@ -487,10 +487,11 @@ impl Experiment {
                     "expected a positive integer".into(),
                 ));
             }
-            if r.batches < 2 {
+            let max = caustics_reference::MAX_BATCHES;
+            if !(2..=max).contains(&r.batches) {
                 return Err(invalid(
                     "reference.batches",
-                    format!("expected at least 2, got {}", r.batches),
+                    format!("expected an integer in 2..={max}, got {}", r.batches),
                 ));
             }
         }
@@ -521,13 +522,22 @@ impl Experiment {
                 }
                 scene.camera.width = w;
                 scene.camera.height = h;
+                if runs.len() + methods.len() * param_sets.len() > MAX_RUNS {
+                    return Err(invalid(
+                        &at("params"),
+                        format!("the experiment makes more than {MAX_RUNS} runs; split it"),
+                    ));
+                }
                 for method in &methods {
                     let info = registry::find(method)
                         .map_err(|e| invalid(&at("methods"), format!("{e:#}")))?;
                     for params in &param_sets {
                         let value = serde_json::Value::Object(params.clone());
-                        (info.validate_params)(&value).map_err(|e| {
-                            invalid(&at("params"), format!("{e} (in the parameter set {value})"))
+                        registry::validate_params(&info, &value).map_err(|e| {
+                            invalid(
+                                &at("params"),
+                                format!("{e:#} (in the parameter set {value})"),
+                            )
                         })?;
                         let spec = RunSpec {
                             index: runs.len(),
@@ -733,6 +743,9 @@ fn select_methods(
 
 type Params = serde_json::Map<String, serde_json::Value>;
 
+/// Most runs an experiment may expand to (parameter sets of a group, and runs in all).
+pub const MAX_RUNS: usize = 10_000;
+
 /// The parameter sets of a group: the cartesian product of each object's swept values.
 fn expand_params(
     v: &serde_json::Value,
@@ -765,6 +778,19 @@ fn expand_params(
     };
     let mut out = Vec::new();
     for (field, obj) in objects {
+        // Bounded before expanding: a sweep is a product of its arrays' lengths.
+        let size = obj.values().try_fold(1usize, |n, v| match v {
+            Value::Array(a) => n.checked_mul(a.len().max(1)),
+            _ => Some(n),
+        });
+        if size.is_none_or(|n| n + out.len() > MAX_RUNS) {
+            return Err(invalid(
+                &field,
+                format!(
+                    "the sweep makes more than {MAX_RUNS} parameter sets (the product of its arrays' lengths); split the experiment"
+                ),
+            ));
+        }
         let mut sets = vec![Params::new()];
         for (k, v) in obj {
             let values: Vec<Value> = match v {

@@ -16,6 +16,7 @@ pub mod registry;
 pub mod report;
 pub mod reproduce;
 pub mod result;
+pub mod resume;
 pub mod run;
 pub mod stats;
 pub mod summary;

@@ -11,6 +11,15 @@
 //! summary.json summary.md bmf.json   written from the manifest and the result files
 //! plots/*.png
 //! ```
+//!
+//! **Killed and resumed.** Every file goes through [`caustics_metrics::atomic_write`], a
+//! run folder's `result.json` is written last and the experiment folder's
+//! `manifest.json` last of all (it is removed when a reproduction starts), so a killed
+//! `reproduce` leaves whole files and a folder without a manifest. The same command again
+//! keeps every run folder that is complete and made from the same inputs
+//! ([`crate::resume`] says which inputs and why), redoes the others from an emptied
+//! folder, removes the temporaries the killed process left, and ends with the files an
+//! uninterrupted run writes. `--fresh` starts over.
 
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
@@ -21,6 +30,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use serde::{Deserialize, Serialize};
 
 use crate::experiment::{Experiment, RunSpec, parse_shard};
+use crate::resume::{Completeness, DirLock, Expected};
 use crate::run::{RunOptions, RunOutcome, run_scene};
 
 /// Flags of `caustics reproduce`.
@@ -58,6 +68,11 @@ pub struct ReproduceArgs {
     /// reproduction in the output folder from its manifest and result files.
     #[arg(long, conflicts_with = "shard")]
     pub summary_only: bool,
+    /// Start over: remove the experiment folder's earlier runs, plots and summary first
+    /// (by default complete runs made from the same inputs are kept: a killed
+    /// reproduction resumes). The reference cache is not touched.
+    #[arg(long, conflicts_with = "summary_only")]
+    pub fresh: bool,
 }
 
 /// Bumped when a field of the manifest or summary changes meaning.
@@ -145,6 +160,7 @@ pub fn reproduce(args: &ReproduceArgs) -> Result<Outcome> {
     for e in &experiments {
         let out = args.out.join(&e.def.name);
         if args.summary_only {
+            let _lock = DirLock::take(&out)?;
             let manifest = read_manifest(&out)?;
             if manifest.experiment_hash != e.hash || manifest.scale != args.scale {
                 bail!(
@@ -188,25 +204,104 @@ fn reproduce_one(
         out.display()
     );
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    let _lock = DirLock::take(out)?;
+    if args.fresh {
+        crate::resume::clear_outputs(out)?;
+    }
+    // Holding the lock, every temporary in the folder is a killed writer's.
+    let stale = crate::resume::remove_temp_files(out, true)?;
+    if !stale.is_empty() {
+        eprintln!(
+            "removed {} temporary files of an interrupted run in {}",
+            stale.len(),
+            out.display()
+        );
+    }
     let (rendered, missing) = ensure_references(e, &runs, args)?;
+    crate::resume::mark_unfinished(out)?;
+    let build = crate::machine::build();
+    let cpu = crate::machine::cpu_model();
+    let adapter = args
+        .adapter
+        .clone()
+        .filter(|a| !a.is_empty())
+        .or_else(|| std::env::var(caustics_gpu::ADAPTER_ENV).ok())
+        .filter(|a| !a.is_empty());
+    let exe = crate::resume::ExeStamp::current();
     let progress = bar(runs.len() as u64, "runs");
     // A steady tick redraws the bar below the lines each run prints to stderr.
     progress.enable_steady_tick(std::time::Duration::from_millis(500));
     let mut statuses = Vec::new();
+    let mut kept = 0;
     for spec in &runs {
         progress.set_message(spec.key());
-        let status = run_one(e, spec, args, out);
+        let rel = run_rel(spec);
+        let dir = out.join(&rel);
+        let expected = Expected {
+            spec,
+            score_grid: e.def.score_grid,
+            exposure: e.def.exposure,
+            reference: crate::references::find(&args.references, &spec.scene)
+                .ok()
+                .flatten()
+                .map(|c| c.caustic().display().to_string()),
+            build: &build,
+            cpu: &cpu,
+            adapter: adapter.as_deref(),
+            keep_exr: args.keep_exr,
+            exe: exe.as_ref(),
+        };
+        let status = match crate::resume::completeness(&dir, &expected) {
+            Completeness::Complete(result) => {
+                if !args.keep_exr {
+                    crate::resume::drop_exrs(&dir, &result.images);
+                }
+                kept += 1;
+                RunStatus {
+                    index: spec.index,
+                    key: spec.key(),
+                    status: "done".into(),
+                    dir: Some(rel.display().to_string()),
+                    reason: None,
+                }
+            }
+            c => {
+                if let Completeness::Stale(why) = c {
+                    // suspend, not println: println prints nothing without a terminal.
+                    progress.suspend(|| eprintln!("redoing {}: {why}", spec.key()));
+                }
+                // Nothing of an earlier attempt stays beside the new files.
+                if dir.exists() {
+                    std::fs::remove_dir_all(&dir)
+                        .with_context(|| format!("removing {}", dir.display()))?;
+                }
+                let status = run_one(e, spec, args, out);
+                // After result.json: the run is complete once this is written.
+                if let Some(stamp) = exe.as_ref().filter(|_| status.status == "done") {
+                    stamp.write(&dir)?;
+                }
+                status
+            }
+        };
         if status.status == "failed" {
-            progress.println(format!(
-                "failed: {}: {}",
-                spec.key(),
-                status.reason.as_deref().unwrap_or("")
-            ));
+            progress.suspend(|| {
+                eprintln!(
+                    "failed: {}: {}",
+                    spec.key(),
+                    status.reason.as_deref().unwrap_or("")
+                )
+            });
         }
         statuses.push(status);
         progress.inc(1);
     }
     progress.finish_and_clear();
+    if kept > 0 {
+        eprintln!(
+            "{}: kept {kept} complete runs of an earlier reproduction (--fresh redoes them)",
+            e.def.name
+        );
+    }
     let failed = statuses.iter().filter(|s| s.status == "failed").count();
     let manifest = Manifest {
         schema_version: MANIFEST_VERSION,
@@ -219,8 +314,9 @@ fn reproduce_one(
         missing_references: missing,
         rendered_references: rendered,
     };
-    write_manifest(out, &manifest)?;
+    // The manifest last: a folder with one is finished.
     let summary = crate::summary::write_all(out, e, &manifest)?;
+    write_manifest(out, &manifest)?;
     eprintln!(
         "{}: {} done, {} skipped, {} failed in {:.1} s; summary in {}",
         e.def.name,
@@ -243,11 +339,72 @@ pub fn read_manifest(dir: &Path) -> Result<Manifest> {
     let p = dir.join("manifest.json");
     let text = std::fs::read_to_string(&p).with_context(|| {
         format!(
-            "reading {}: not a `caustics reproduce` output folder",
+            "reading {}: not a finished `caustics reproduce` output folder (an interrupted reproduction has none until it is resumed: run the same command again)",
             p.display()
         )
     })?;
-    serde_json::from_str(&text).with_context(|| format!("{}: not a manifest.json", p.display()))
+    let m: Manifest = serde_json::from_str(&text)
+        .with_context(|| format!("{}: not a manifest.json", p.display()))?;
+    check_manifest(&m).map_err(|e| anyhow::anyhow!("{}: {e}", p.display()))?;
+    Ok(m)
+}
+
+/// What serde cannot check in a manifest from elsewhere: the version, the shard, the
+/// statuses, and that every run folder lies inside the experiment folder (`merge` copies
+/// them, `compare` reads them).
+fn check_manifest(m: &Manifest) -> std::result::Result<(), String> {
+    if m.schema_version != MANIFEST_VERSION {
+        return Err(format!(
+            "schema_version: expected {MANIFEST_VERSION}, got {} (written by another version of caustics)",
+            m.schema_version
+        ));
+    }
+    if !(m.scale.is_finite() && m.scale > 0.0) {
+        return Err(format!(
+            "scale: expected a positive number, got {}",
+            m.scale
+        ));
+    }
+    let [k, n] = m.shard;
+    if k == 0 || k > n {
+        return Err(format!(
+            "shard: expected [k, n] with 1 <= k <= n, got [{k}, {n}]"
+        ));
+    }
+    for (i, r) in m.runs.iter().enumerate() {
+        if !["done", "skipped", "failed"].contains(&r.status.as_str()) {
+            return Err(format!(
+                "runs[{i}].status: expected \"done\", \"skipped\" or \"failed\", got {:?}",
+                r.status
+            ));
+        }
+        match (&r.dir, r.status == "done") {
+            (None, true) => {
+                return Err(format!(
+                    "runs[{i}].dir: expected the run folder of a done run"
+                ));
+            }
+            (Some(_), false) => {
+                return Err(format!(
+                    "runs[{i}].dir: expected none for a {} run",
+                    r.status
+                ));
+            }
+            _ => {}
+        }
+        if let Some(d) = &r.dir {
+            let p = Path::new(d);
+            let inside = p.starts_with("runs")
+                && p.components()
+                    .all(|c| matches!(c, std::path::Component::Normal(_)));
+            if !inside {
+                return Err(format!(
+                    "runs[{i}].dir: expected a folder under runs/ of the experiment folder, got {d:?}"
+                ));
+            }
+        }
+    }
+    Ok(())
 }
 
 /// Renders the references the shard's runs need and the cache lacks, when the experiment
@@ -277,6 +434,11 @@ fn ensure_references(
             continue;
         }
         seen.insert(label.clone());
+        // A killed render's temporaries (the cache is shared: only dead writers' go).
+        crate::resume::remove_temp_files(
+            &crate::references::cache_dir(&args.references, scene),
+            false,
+        )?;
         match e.def.reference.filter(|_| !args.no_render_references) {
             Some(budget) => {
                 let dir = crate::references::cache_dir(&args.references, scene);
@@ -317,6 +479,14 @@ fn ensure_references(
     Ok((rendered, missing))
 }
 
+/// `runs/<params>/<scene>/<method>`: the run folder, relative to the experiment folder.
+fn run_rel(spec: &RunSpec) -> PathBuf {
+    Path::new("runs")
+        .join(&spec.slug)
+        .join(&spec.scene.name)
+        .join(&spec.method)
+}
+
 fn run_one(e: &Experiment, spec: &RunSpec, args: &ReproduceArgs, out: &Path) -> RunStatus {
     let rel = Path::new("runs").join(&spec.slug);
     let o = RunOptions {
@@ -342,12 +512,9 @@ fn run_one(e: &Experiment, spec: &RunSpec, args: &ReproduceArgs, out: &Path) -> 
     match run_scene(&o, spec.scene.clone()) {
         Ok(RunOutcome::Done { dir, result }) => {
             if !args.keep_exr {
-                // Every linear image the run wrote (large); the PNGs and result.json stay.
-                for file in result.images.values().filter(|f| f.ends_with(".exr")) {
-                    let _ = std::fs::remove_file(dir.join(file));
-                }
+                crate::resume::drop_exrs(&dir, &result.images);
             }
-            let rel = rel.join(&spec.scene.name).join(&spec.method);
+            let rel = run_rel(spec);
             status("done", Some(rel.display().to_string()), None)
         }
         Ok(RunOutcome::Skipped { reason }) => status("skipped", None, Some(reason)),
@@ -429,16 +596,34 @@ pub fn merge(args: &MergeArgs) -> Result<PathBuf> {
             first.experiment_hash
         );
     }
-    if args.out.exists()
-        && std::fs::read_dir(&args.out)
+    if args.out.exists() {
+        let entries: Vec<String> = std::fs::read_dir(&args.out)
             .with_context(|| format!("reading {}", args.out.display()))?
-            .next()
-            .is_some()
-    {
-        bail!(
-            "--out {}: exists and is not empty; merge writes a fresh folder",
-            args.out.display()
-        );
+            .map(|e| e.map(|e| e.file_name().to_string_lossy().into_owned()))
+            .collect::<std::io::Result<_>>()
+            .with_context(|| format!("reading {}", args.out.display()))?;
+        // An interrupted merge (no manifest.json, written last, and only what merge
+        // writes) is redone; anything else is not merge's to replace.
+        let interrupted = !entries.iter().any(|n| n == "manifest.json")
+            && entries.iter().all(|n| {
+                ["runs", "plots"].contains(&n.as_str())
+                    || crate::resume::SUMMARY_FILES.contains(&n.as_str())
+                    || crate::resume::temp_file_pid(n).is_some()
+            });
+        if !entries.is_empty() && !interrupted {
+            bail!(
+                "--out {}: exists and is not empty; merge writes a fresh folder",
+                args.out.display()
+            );
+        }
+        if !entries.is_empty() {
+            eprintln!(
+                "--out {}: an interrupted merge; merging again",
+                args.out.display()
+            );
+            crate::resume::clear_outputs(&args.out)?;
+            crate::resume::remove_temp_files(&args.out, true)?;
+        }
     }
     let mut runs: Vec<RunStatus> = Vec::new();
     for (m, d) in manifests.iter().zip(&args.shards) {
@@ -483,8 +668,9 @@ pub fn merge(args: &MergeArgs) -> Result<PathBuf> {
         missing_references: union(|m| &m.missing_references),
         rendered_references: union(|m| &m.rendered_references),
     };
-    write_manifest(&args.out, &manifest)?;
+    // The manifest last: a folder with one is a finished merge.
     crate::summary::write_all(&args.out, &e, &manifest)?;
+    write_manifest(&args.out, &manifest)?;
     Ok(args.out.clone())
 }
 

@@ -47,6 +47,7 @@ fn args(tmp: &Path, exp: &Path, out: &str, shard: Option<&str>) -> ReproduceArgs
         adapter: None,
         keep_exr: false,
         summary_only: false,
+        fresh: false,
     }
 }
 
