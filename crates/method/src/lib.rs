@@ -220,9 +220,11 @@ pub fn parse_params<P: DeserializeOwned + serde::Serialize + Default>(
             });
         }
     }
-    serde_json::from_value(params.clone()).map_err(|e| MethodError::Param {
+    // The path names the parameter at fault ("grid: invalid type: string ..."), which
+    // serde_json's own error does not.
+    serde_path_to_error::deserialize(params.clone()).map_err(|e| MethodError::Param {
         method,
-        message: e.to_string(),
+        message: format!("{}: {}", e.path(), e.inner()),
     })
 }
 
@@ -309,7 +311,10 @@ mod tests {
 
     #[test]
     fn wrong_type_is_an_error_and_defaults_fill_in() {
-        assert!(parse_params::<P>("m", &serde_json::json!({"grid": "x"})).is_err());
+        let e = parse_params::<P>("m", &serde_json::json!({"grid": "x"}))
+            .expect_err("a string for a u32")
+            .to_string();
+        assert!(e.contains("parameter grid: invalid type"), "{e}");
         assert!(parse_params::<P>("m", &serde_json::json!({"grid": -1})).is_err());
         let p = parse_params::<P>("m", &serde_json::json!({"grid": 7})).expect("valid");
         assert_eq!(
