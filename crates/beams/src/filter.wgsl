@@ -13,13 +13,6 @@ struct FilterUniforms {
 @group(1) @binding(0) var<uniform> fu: FilterUniforms;
 @group(1) @binding(1) var raw_surface: texture_2d<f32>;
 
-@vertex
-fn vs_fullscreen(@builtin(vertex_index) vi: u32) -> @builtin(position) vec4<f32> {
-    let x = f32((vi << 1u) & 2u);
-    let y = f32(vi & 2u);
-    return vec4<f32>(2.0 * x - 1.0, 1.0 - 2.0 * y, 0.0, 1.0);
-}
-
 @fragment
 fn fs_filter(@builtin(position) pos: vec4<f32>) -> @location(0) vec4<f32> {
     let p = vec2<i32>(pos.xy);

@@ -295,13 +295,6 @@ impl RunSpec {
     pub fn key(&self) -> String {
         format!("{}/{}/{}", self.scene.name, self.method, self.slug)
     }
-    /// Parameters as `--param` flags (values as JSON).
-    pub fn param_flags(&self) -> Vec<String> {
-        self.params
-            .iter()
-            .map(|(k, v)| format!("{k}={v}"))
-            .collect()
-    }
 }
 
 /// A loaded, validated experiment.
@@ -533,7 +526,7 @@ impl Experiment {
                         .map_err(|e| invalid(&at("methods"), format!("{e:#}")))?;
                     for params in &param_sets {
                         let value = serde_json::Value::Object(params.clone());
-                        registry::validate_params(&info, &value).map_err(|e| {
+                        registry::parse_params(&info, &value).map_err(|e| {
                             invalid(
                                 &at("params"),
                                 format!("{e:#} (in the parameter set {value})"),

@@ -61,7 +61,11 @@ fn list() {
         println!("  {:<20} source: {}", "", m.source);
         println!("  {:<20} supports: {}", "", m.capabilities.describe());
         for p in (m.params)() {
-            println!("  {:<20}   --param {}={}  {}", "", p.name, p.default, p.doc);
+            let range = p.range.map(|r| format!(" in {r}")).unwrap_or_default();
+            println!(
+                "  {:<20}   --param {}={}  {} ({}{range})",
+                "", p.name, p.default, p.doc, p.kind
+            );
         }
     }
 }

@@ -1,16 +1,16 @@
 //! The table of methods (STYLE: one table lists them, with parameters and support).
 
-use caustics_method::MethodInfo;
+use caustics_method::{MethodInfo, registry_entry};
 
 /// Every method the harness can run, in the order `caustics list` prints them.
 pub fn methods() -> Vec<MethodInfo> {
     vec![
-        wavefront::info(),
-        pinhole::info(),
-        static_grid::info(),
-        adaptive_beams::info(),
-        caustic_triangles::info(),
-        splatting::info(),
+        registry_entry::<wavefront::Wavefront>(),
+        registry_entry::<pinhole::Pinhole>(),
+        registry_entry::<static_grid::StaticGrid>(),
+        registry_entry::<adaptive_beams::AdaptiveBeams>(),
+        registry_entry::<caustic_triangles::CausticTriangles>(),
+        registry_entry::<splatting::Splatting>(),
     ]
 }
 
@@ -24,8 +24,11 @@ pub fn find(name: &str) -> anyhow::Result<MethodInfo> {
         .ok_or_else(|| anyhow::anyhow!("unknown method {name:?}; known methods: {known}"))
 }
 
-/// The method's `validate_params` (its errors name the parameter at fault), as an
-/// `anyhow` error.
-pub fn validate_params(info: &MethodInfo, params: &serde_json::Value) -> anyhow::Result<()> {
-    Ok((info.validate_params)(params)?)
+/// The method's parameters parsed and checked (its errors name the parameter at fault),
+/// as an `anyhow` error.
+pub fn parse_params(
+    info: &MethodInfo,
+    params: &serde_json::Value,
+) -> anyhow::Result<caustics_method::ParsedParams> {
+    Ok((info.parse)(params)?)
 }

@@ -492,7 +492,8 @@ fn run_one(e: &Experiment, spec: &RunSpec, args: &ReproduceArgs, out: &Path) -> 
     let o = RunOptions {
         scene: spec.scene.source.display().to_string(),
         method: spec.method.clone(),
-        params: spec.param_flags(),
+        params: Vec::new(),
+        param_values: spec.params.clone(),
         frames: spec.frames,
         warmup: spec.warmup,
         reference: None,

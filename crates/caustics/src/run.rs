@@ -34,9 +34,13 @@ pub struct RunOptions {
     /// Method name (see `caustics list`).
     #[arg(long)]
     pub method: String,
-    /// Method parameter, `key=value` (repeatable).
+    /// Method parameter, `key=value` (repeatable); the value is read as JSON
+    /// (`grid=64`, `hull="tight"` or `hull=tight`).
     #[arg(long = "param", value_name = "KEY=VALUE")]
     pub params: Vec<String>,
+    /// Parameters given as typed JSON values (experiments); merged with `params`.
+    #[arg(skip)]
+    pub param_values: serde_json::Map<String, serde_json::Value>,
     /// Measured frames (timings are medians over these).
     #[arg(long, default_value_t = 20)]
     pub frames: u32,
@@ -88,7 +92,9 @@ pub enum RunOutcome {
 
 /// Turns `key=value` flags into a JSON object. Values parse as JSON when they can
 /// (numbers, booleans, quoted strings), else they are taken as strings.
-pub fn parse_param_flags(flags: &[String]) -> Result<serde_json::Value> {
+pub fn parse_param_flags(
+    flags: &[String],
+) -> Result<serde_json::Map<String, serde_json::Value>> {
     let mut map = serde_json::Map::new();
     for flag in flags {
         let Some((key, value)) = flag.split_once('=') else {
@@ -102,6 +108,18 @@ pub fn parse_param_flags(flags: &[String]) -> Result<serde_json::Value> {
             .unwrap_or_else(|_| serde_json::Value::String(value.to_owned()));
         if map.insert(key.to_owned(), value).is_some() {
             bail!("--param {key} given twice");
+        }
+    }
+    Ok(map)
+}
+
+/// The parameters a run was given: the typed values, then the `--param` flags (a key
+/// given both ways is an error).
+fn given_params(o: &RunOptions) -> Result<serde_json::Value> {
+    let mut map = o.param_values.clone();
+    for (k, v) in parse_param_flags(&o.params)? {
+        if map.insert(k.clone(), v).is_some() {
+            bail!("--param {k} is also given as a typed value");
         }
     }
     Ok(serde_json::Value::Object(map))
@@ -150,9 +168,10 @@ pub fn run(o: &RunOptions) -> Result<RunOutcome> {
 pub fn run_scene(o: &RunOptions, scene: Scene) -> Result<RunOutcome> {
     validate_options(o)?;
     let info = registry::find(&o.method)?;
-    let params = parse_param_flags(&o.params)?;
-    (info.validate_params)(&params)?;
-    if let Err(reason) = info.supports(&scene, &params) {
+    let params = given_params(o)?;
+    // Parsed and checked once; the method receives its own typed struct.
+    let parsed = (info.parse)(&params)?;
+    if let Err(reason) = info.supports(&scene, &parsed) {
         return Ok(RunOutcome::Skipped { reason: reason.0 });
     }
     let reference = load_reference(o, &scene, info.capabilities.volume)?;
@@ -173,7 +192,7 @@ pub fn run_scene(o: &RunOptions, scene: Scene) -> Result<RunOutcome> {
     let scene = Arc::new(scene);
     let gpu_scene = GpuScene::upload(&ctx, scene.clone(), Default::default())?;
     let renderer = Renderer::new(&ctx, gpu_scene, RendererOptions::default())?;
-    let mut method = (info.create)(&ctx, &renderer, &params)?;
+    let mut method = (info.create)(&ctx, &renderer, &parsed)?;
 
     // Warm-up and timed frames with counting off, then one count frame.
     let mut profiler = PassProfiler::new(&ctx, o.warmup + o.frames + 1);
@@ -584,7 +603,7 @@ mod tests {
         let v = parse_param_flags(&["grid=64".into(), "hull=tight".into(), "on=true".into()])
             .expect("valid");
         assert_eq!(
-            v,
+            serde_json::Value::Object(v),
             serde_json::json!({"grid": 64, "hull": "tight", "on": true})
         );
         assert!(parse_param_flags(&["grid".into()]).is_err());

@@ -65,7 +65,7 @@ fn sweeps_expand_to_the_cartesian_product_and_scale_applies() {
         (last.scene.camera.width, last.scene.camera.height),
         (20, 15)
     );
-    assert!(last.param_flags().contains(&"grid=256".to_owned()));
+    assert_eq!(last.params.get("grid"), Some(&serde_json::json!(256)));
     // Shards partition the runs.
     let mut all: Vec<usize> = (1..=3)
         .flat_map(|k| e.shard(k, 3).into_iter().map(|r| r.index))

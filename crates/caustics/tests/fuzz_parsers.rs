@@ -5,7 +5,7 @@
 //! `catch_unwind`. Every read must return (no panic) within a bounded time, and every
 //! error must name the file. Then every parameter of every method, from the registry's
 //! `ParamSpec`s, with hostile `--param` values through `parse_param_flags` and the
-//! method's `validate_params`: no panic, and the values that should be refused but are
+//! method's `parse`: no panic, and the values that should be refused but are
 //! accepted are listed.
 //!
 //! The generator is SplitMix64, as in `crates/scene/tests/fuzz_loaders.rs` (no new
@@ -630,12 +630,12 @@ fn hostile_param_values_of_every_method_never_panic() {
             .iter()
             .map(|p| (p.name.clone(), p.default.clone()))
             .collect();
-        (m.validate_params)(&Value::Object(defaults)).unwrap_or_else(|e| {
+        (m.parse)(&Value::Object(defaults)).unwrap_or_else(|e| {
             panic!("{}: its own defaults are refused: {e}", m.name);
         });
         // An unknown parameter is refused by name.
         let unknown = caustics::run::parse_param_flags(&["no_such_param=1".into()]).expect("flags");
-        let e = (m.validate_params)(&unknown).expect_err("unknown parameter accepted");
+        let e = (m.parse)(&Value::Object(unknown)).expect_err("unknown parameter accepted");
         assert!(e.to_string().contains("no_such_param"), "{}: {e}", m.name);
         for p in &specs {
             for (kind, v) in HOSTILE {
@@ -643,7 +643,7 @@ fn hostile_param_values_of_every_method_never_panic() {
                 let flag = format!("{}={v}", p.name);
                 let r = catch_unwind(AssertUnwindSafe(|| {
                     let params = caustics::run::parse_param_flags(std::slice::from_ref(&flag))?;
-                    caustics::registry::validate_params(&m, &params)?;
+                    caustics::registry::parse_params(&m, &Value::Object(params.clone()))?;
                     Ok::<_, anyhow::Error>(params)
                 }));
                 match r {
@@ -659,7 +659,7 @@ fn hostile_param_values_of_every_method_never_panic() {
                         // The method's own message (what `caustics run --param` shows).
                         let params = caustics::run::parse_param_flags(std::slice::from_ref(&flag))
                             .expect("flags parsed above");
-                        if let Err(raw) = (m.validate_params)(&params)
+                        if let Err(raw) = (m.parse)(&Value::Object(params))
                             && !raw.to_string().contains(&p.name)
                         {
                             unnamed.push(format!("{} --param {flag}: {raw}", m.name));

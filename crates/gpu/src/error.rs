@@ -70,6 +70,9 @@ pub enum GpuError {
         /// wgpu's message.
         message: String,
     },
+    /// A shader failed to parse or validate (naga's report, with the source lines).
+    #[error("{0}")]
+    Shader(String),
     /// A resource was asked for with arguments it cannot be built from.
     #[error("invalid GPU resource request: {0}")]
     Invalid(String),

@@ -628,3 +628,13 @@ fn light_view_uniforms(view: &LightView) -> Vec<ViewUniform> {
         })
         .collect()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn view_uniform_matches_its_wgsl() {
+        crate::assert_wgsl_layout!(crate::shader::compose(crate::shader::GBUFFER_WGSL), ViewUniform as "View" { view_proj, eye });
+    }
+}

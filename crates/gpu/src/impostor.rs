@@ -477,6 +477,11 @@ mod tests {
     use super::*;
 
     #[test]
+    fn impostor_view_matches_its_wgsl() {
+        crate::assert_wgsl_layout!(shader::compose(IMPOSTOR_RENDER_WGSL), ImpostorView { view_proj, center });
+    }
+
+    #[test]
     fn impostor_shaders_validate() -> Result<(), String> {
         shader::validate_wgsl(
             "impostor_render.wgsl",

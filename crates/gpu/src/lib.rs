@@ -27,6 +27,8 @@ mod error;
 pub mod frame;
 pub mod gbuffer;
 pub mod impostor;
+pub mod layout;
+pub mod pass;
 pub mod profiling;
 pub mod readback;
 pub mod renderer;

@@ -592,3 +592,14 @@ pub fn pass_desc<'a>(
         multiview_mask: None,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn uniforms_match_their_wgsl() {
+        crate::assert_wgsl_layout!(shader::compose_method(""), FrameUniforms { view_proj, eye, forward, resolution, counts });
+        crate::assert_wgsl_layout!(shader::compose(shader::DIRECT_WGSL), DirectUniform as "DirectLight" { light, face_view_proj, params });
+    }
+}

@@ -15,7 +15,6 @@ use caustics_gpu::{
     subpixel_offsets,
 };
 use caustics_scene::Scene;
-use serde::de::DeserializeOwned;
 
 /// A method instance bound to one scene.
 pub trait CausticsMethod {
@@ -150,22 +149,43 @@ pub enum MethodError {
     Gpu(#[from] GpuError),
 }
 
-/// One parameter as `caustics list` shows it.
-#[derive(Clone, Debug, PartialEq)]
-pub struct ParamSpec {
-    /// Name used in `--param name=value`.
-    pub name: String,
-    /// Default value, as JSON.
-    pub default: serde_json::Value,
-    /// What it does.
-    pub doc: &'static str,
+pub mod params;
+
+pub use params::{MethodParams, ParamSpec, ParamValue, ParsedParams, Range, above, closed};
+
+/// A method as the registry knows it: its name, paper, capabilities, typed parameters
+/// and how to build it. Implemented once per method crate (on a marker type);
+/// [`registry_entry`] turns it into the harness's [`MethodInfo`].
+pub trait Method: 'static {
+    /// Its parameters, declared with [`method_params!`].
+    type Params: MethodParams;
+    /// Registry name (`--method`).
+    const NAME: &'static str;
+    /// One line on what it is.
+    const SUMMARY: &'static str;
+    /// The paper it implements.
+    const SOURCE: &'static str;
+    /// What it supports.
+    const CAPABILITIES: Capabilities;
+
+    /// Scene checks beyond [`Capabilities::check`], given the (valid) parameters.
+    fn check_scene(_scene: &Scene, _params: &Self::Params) -> Result<(), Unsupported> {
+        Ok(())
+    }
+
+    /// Builds an instance for the renderer's scene.
+    fn create(
+        ctx: &GpuContext,
+        renderer: &Renderer,
+        params: &Self::Params,
+    ) -> Result<Box<dyn CausticsMethod>, MethodError>;
 }
 
-/// Builds a method instance for the renderer's scene from JSON parameters.
+/// Builds a method instance for the renderer's scene from parsed parameters.
 pub type CreateFn =
-    fn(&GpuContext, &Renderer, &serde_json::Value) -> Result<Box<dyn CausticsMethod>, MethodError>;
+    fn(&GpuContext, &Renderer, &ParsedParams) -> Result<Box<dyn CausticsMethod>, MethodError>;
 
-/// Everything the harness's registry knows of a method.
+/// Everything the harness's registry knows of a method (made by [`registry_entry`]).
 pub struct MethodInfo {
     /// Registry name (`--method`).
     pub name: &'static str,
@@ -175,85 +195,59 @@ pub struct MethodInfo {
     pub source: &'static str,
     /// What it supports.
     pub capabilities: Capabilities,
-    /// Its parameters with defaults (the paper's) and docs.
+    /// Its parameters with defaults (the paper's), types, ranges and docs.
     pub params: fn() -> Vec<ParamSpec>,
-    /// Parses and range-checks parameters without touching the GPU, so a bad
-    /// `--param` fails before any work or any write.
-    pub validate_params: fn(&serde_json::Value) -> Result<(), MethodError>,
-    /// Scene checks beyond the generic ones, given the (valid) parameters.
-    pub check_scene: fn(&Scene, &serde_json::Value) -> Result<(), Unsupported>,
-    /// Builds an instance for a scene, from parameters given as a JSON object.
+    /// Parses and checks parameters once (a JSON object; `null` = defaults), without
+    /// touching the GPU, so a bad `--param` fails before any work or any write.
+    pub parse: fn(&serde_json::Value) -> Result<ParsedParams, MethodError>,
+    /// Scene checks beyond the generic ones, given parsed parameters.
+    pub check_scene: fn(&Scene, &ParsedParams) -> Result<(), Unsupported>,
+    /// Builds an instance for a scene.
     pub create: CreateFn,
 }
 
 impl MethodInfo {
     /// Generic capability checks, then the method's own.
-    pub fn supports(&self, scene: &Scene, params: &serde_json::Value) -> Result<(), Unsupported> {
+    pub fn supports(&self, scene: &Scene, params: &ParsedParams) -> Result<(), Unsupported> {
         self.capabilities.check(scene)?;
         (self.check_scene)(scene, params)
     }
 }
 
-/// Deserializes a method's parameter struct from a JSON object (missing keys take the
-/// struct's defaults; use `#[serde(default, deny_unknown_fields)]`), with an error that
-/// names the parameter and lists the known ones.
-pub fn parse_params<P: DeserializeOwned + serde::Serialize + Default>(
-    method: &'static str,
-    params: &serde_json::Value,
-) -> Result<P, MethodError> {
-    let known = param_names(&P::default());
-    let obj = match params {
-        serde_json::Value::Null => return Ok(P::default()),
-        serde_json::Value::Object(o) => o,
-        other => {
-            return Err(MethodError::Param {
-                method,
-                message: format!("expected a JSON object, got {other}"),
-            });
-        }
-    };
-    for key in obj.keys() {
-        if !known.contains(key) {
-            return Err(MethodError::Param {
-                method,
-                message: format!("{key:?} is unknown; known parameters: {}", known.join(", ")),
-            });
-        }
-    }
-    // The path names the parameter at fault ("grid: invalid type: string ..."), which
-    // serde_json's own error does not.
-    serde_path_to_error::deserialize(params.clone()).map_err(|e| MethodError::Param {
-        method,
-        message: format!("{}: {}", e.path(), e.inner()),
-    })
-}
-
-fn param_names<P: serde::Serialize>(p: &P) -> Vec<String> {
-    match serde_json::to_value(p) {
-        Ok(serde_json::Value::Object(o)) => o.keys().cloned().collect(),
-        _ => Vec::new(),
+/// The registry entry of `M`: one generic function instead of per-method glue.
+pub fn registry_entry<M: Method>() -> MethodInfo {
+    MethodInfo {
+        name: M::NAME,
+        summary: M::SUMMARY,
+        source: M::SOURCE,
+        capabilities: M::CAPABILITIES,
+        params: M::Params::specs,
+        parse: parse_erased::<M>,
+        check_scene: check_erased::<M>,
+        create: create_erased::<M>,
     }
 }
 
-/// Parameter specs from a defaults struct and per-field docs (`(name, doc)` pairs).
-pub fn param_specs<P: serde::Serialize + Default>(
-    docs: &[(&'static str, &'static str)],
-) -> Vec<ParamSpec> {
-    let defaults = match serde_json::to_value(P::default()) {
-        Ok(serde_json::Value::Object(o)) => o,
-        _ => Default::default(),
-    };
-    defaults
-        .into_iter()
-        .map(|(name, default)| {
-            let doc = docs
-                .iter()
-                .find(|(n, _)| *n == name)
-                .map(|(_, d)| *d)
-                .unwrap_or("");
-            ParamSpec { name, default, doc }
-        })
-        .collect()
+fn parse_erased<M: Method>(v: &serde_json::Value) -> Result<ParsedParams, MethodError> {
+    Ok(ParsedParams::new(
+        M::NAME,
+        params::parse::<M::Params>(M::NAME, v)?,
+    ))
+}
+
+fn check_erased<M: Method>(scene: &Scene, p: &ParsedParams) -> Result<(), Unsupported> {
+    match p.get::<M::Params>(M::NAME) {
+        Ok(p) => M::check_scene(scene, p),
+        Err(e) => Err(Unsupported(e.to_string())),
+    }
+}
+
+fn create_erased<M: Method>(
+    ctx: &GpuContext,
+    renderer: &Renderer,
+    p: &ParsedParams,
+) -> Result<Box<dyn CausticsMethod>, MethodError> {
+    M::create(ctx, renderer, p.get::<M::Params>(M::NAME)?)
 }
 
 /// Renders the scoring frame of `method` (DESIGN "Measuring honestly"): the frame
@@ -285,52 +279,4 @@ pub fn render_scoring_frame(
     renderer.set_subpixel_offset(&ctx.queue, [0.0, 0.0]);
     rendered?;
     Ok(accumulator.read_mean(ctx)?)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[derive(serde::Serialize, serde::Deserialize, Default, Debug, PartialEq)]
-    #[serde(default, deny_unknown_fields)]
-    struct P {
-        grid: u32,
-        scale: f32,
-    }
-
-    #[test]
-    fn unknown_param_names_the_known_ones() {
-        let e = parse_params::<P>("m", &serde_json::json!({"gird": 3}))
-            .expect_err("unknown key")
-            .to_string();
-        assert!(
-            e.contains("\"gird\" is unknown") && e.contains("grid, scale"),
-            "{e}"
-        );
-    }
-
-    #[test]
-    fn wrong_type_is_an_error_and_defaults_fill_in() {
-        let e = parse_params::<P>("m", &serde_json::json!({"grid": "x"}))
-            .expect_err("a string for a u32")
-            .to_string();
-        assert!(e.contains("parameter grid: invalid type"), "{e}");
-        assert!(parse_params::<P>("m", &serde_json::json!({"grid": -1})).is_err());
-        let p = parse_params::<P>("m", &serde_json::json!({"grid": 7})).expect("valid");
-        assert_eq!(
-            p,
-            P {
-                grid: 7,
-                scale: 0.0
-            }
-        );
-    }
-
-    #[test]
-    fn specs_list_defaults_and_docs() {
-        let s = param_specs::<P>(&[("grid", "grid size")]);
-        assert_eq!(s.len(), 2);
-        assert_eq!(s[0].name, "grid");
-        assert_eq!(s[0].doc, "grid size");
-    }
 }

@@ -83,7 +83,7 @@ impl CausticMap {
                 params: [
                     size as f32,
                     if config.distance_test { 1.0 } else { 0.0 },
-                    config.distance_tolerance,
+                    config.distance_tolerance as f32,
                     0.0,
                 ],
             };
@@ -187,6 +187,19 @@ impl CausticMap {
             },
         })];
         Ok(frame.render_pass(name, pass_desc(&attachments))?)
+    }
+
+    /// The atlas as the colour attachment of a reconstruction pass, cleared first.
+    pub fn reconstruction_attachment(&self) -> [Option<wgpu::RenderPassColorAttachment<'_>>; 1] {
+        [Some(wgpu::RenderPassColorAttachment {
+            view: &self.atlas.view,
+            depth_slice: None,
+            resolve_target: None,
+            ops: wgpu::Operations {
+                load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                store: wgpu::StoreOp::Store,
+            },
+        })]
     }
 
     /// Restricts drawing to face `face` of the atlas: clip space of that face's

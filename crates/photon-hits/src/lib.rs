@@ -44,6 +44,7 @@ use caustics_gpu::wgpu::{self, util::DeviceExt};
 use caustics_gpu::{
     Frame, GBuffer, GpuContext, LightProjection, LightView, Renderer, gbuffer::LightFace, shader,
 };
+use caustics_method::params::{above, closed};
 use caustics_method::{Counters, MethodError, Unsupported};
 use caustics_scene::{Light, Mat4, Material, Scene, Shape, Vec3};
 
@@ -79,54 +80,20 @@ const HIT_REASONS: [&str; 7] = [
     "photons_specular_receiver",
 ];
 
-/// The settings shared by both photon-hit methods (each method's parameters carry
-/// them under the same names).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PhotonHitConfig {
-    /// Texels per side of the photon hit location image (per face).
-    pub resolution: u32,
-    /// Texels per side of each face of the two distance maps.
-    pub distance_map_size: u32,
-    /// Texels per side of each face of the caustic cube map.
-    pub cube_size: u32,
-    /// Accept caustic light only where the stored distance matches (§4.3).
-    pub distance_test: bool,
-    /// Relative tolerance of that test: |d_stored − d| ≤ tolerance × d.
-    pub distance_tolerance: f32,
-}
-
-impl PhotonHitConfig {
-    /// Range checks, with errors naming the parameter of `method`.
-    pub fn validate(&self, method: &'static str) -> Result<(), MethodError> {
-        let err = |message: String| Err(MethodError::Param { method, message });
-        if !(2..=1024).contains(&self.resolution) {
-            return err(format!(
-                "resolution: expected an integer in 2..=1024, got {}",
-                self.resolution
-            ));
-        }
-        if !(16..=2048).contains(&self.distance_map_size) {
-            return err(format!(
-                "distance_map_size: expected an integer in 16..=2048, got {}",
-                self.distance_map_size
-            ));
-        }
-        if !(16..=2048).contains(&self.cube_size) {
-            return err(format!(
-                "cube_size: expected an integer in 16..=2048, got {}",
-                self.cube_size
-            ));
-        }
-        if !(self.distance_tolerance.is_finite()
-            && self.distance_tolerance > 0.0
-            && self.distance_tolerance < 1.0)
-        {
-            return err(format!(
-                "distance_tolerance: expected a number in (0, 1), got {}",
-                self.distance_tolerance
-            ));
-        }
-        Ok(())
+caustics_method::method_params! {
+    /// The settings shared by both photon-hit methods, a parameter group of each
+    /// (defaults: Umenhoffer et al. §6 where they give them).
+    pub struct PhotonHitConfig {
+        /// photon hit location image, texels per side (paper: 128)
+        resolution: u32 = 128 => closed(2.0, 1024.0);
+        /// caustic cube map, texels per face side (paper: 512)
+        cube_size: u32 = 512 => closed(16.0, 2048.0);
+        /// distance maps of the generator and the receivers, texels per face side
+        distance_map_size: u32 = 256 => closed(16.0, 2048.0);
+        /// accept caustic light only where the stored distance matches (§4.3; false shows light leaks)
+        distance_test: bool = true;
+        /// distance test: |stored - actual| <= tolerance x actual
+        distance_tolerance: f64 = 0.05 => above(0.0, 1.0);
     }
 }
 
@@ -591,6 +558,7 @@ impl PhotonHit {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use caustics_method::MethodParams;
 
     #[test]
     fn shaders_validate() -> Result<(), String> {
@@ -607,7 +575,7 @@ mod tests {
             distance_test: true,
             distance_tolerance: 0.05,
         };
-        assert!(good.validate("m").is_ok());
+        assert!(good.check().is_ok());
         for (bad, needle) in [
             (
                 PhotonHitConfig {
@@ -638,7 +606,7 @@ mod tests {
                 "distance_tolerance",
             ),
         ] {
-            let msg = bad.validate("m").expect_err(needle).to_string();
+            let msg = bad.check().expect_err(needle);
             assert!(msg.contains(needle), "{msg}");
         }
     }

@@ -11,12 +11,6 @@
 @group(1) @binding(0) var<uniform> cm: CausticMapUniform;
 @group(1) @binding(1) var caustic_atlas: texture_2d<f32>;
 
-@vertex
-fn vs_fullscreen(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
-    let uv = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u));
-    return vec4<f32>(uv * 2.0 - 1.0, 0.0, 1.0);
-}
-
 // Texel `t` of face `face`, clamped to the face (taps past an edge repeat the edge).
 fn atlas_texel(face: u32, t: vec2<i32>) -> vec4<f32> {
     let s = i32(cm.params.x);

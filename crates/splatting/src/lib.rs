@@ -34,135 +34,71 @@
 //! ```
 
 use bytemuck::{Pod, Zeroable};
-use caustics_gpu::binding::{buffers_bind_group, storage_entry, uniform_entry};
+use caustics_gpu::pass::{RasterPass, Shader};
 use caustics_gpu::textures::additive_hdr_target;
 use caustics_gpu::wgpu::{self, util::DeviceExt};
 use caustics_gpu::{Frame, GpuContext, Renderer, shader};
+use caustics_method::params::closed;
 use caustics_method::{
-    Capabilities, CausticsMethod, Counters, MethodError, MethodInfo, Unsupported, param_specs,
-    parse_params,
+    Capabilities, CausticsMethod, Counters, Method, MethodError, Unsupported, method_params,
 };
 use caustics_scene::Scene;
 use photon_hits::{CausticMap, PhotonHitConfig, PhotonHits};
-use serde::{Deserialize, Serialize};
 
 const SPLAT_WGSL: &str = include_str!("splat.wgsl");
 
 /// Registry name.
 pub const NAME: &str = "splatting";
 
-/// Parameters of `splatting` (the photon-hit settings match `caustic-triangles'`).
-#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
-#[serde(default, deny_unknown_fields)]
-pub struct SplattingParams {
-    /// Photon hit location image, texels per side.
-    pub resolution: u32,
-    /// Caustic cube map, texels per face side.
-    pub cube_size: u32,
-    /// Distance maps (generator and receivers), texels per face side.
-    pub distance_map_size: u32,
-    /// Accept caustic light only where the stored distance matches.
-    pub distance_test: bool,
-    /// Relative tolerance of the distance test.
-    pub distance_tolerance: f64,
-    /// Kernel side in cube-map texels.
-    pub kernel_px: u32,
-}
-
-impl Default for SplattingParams {
-    fn default() -> Self {
-        Self {
-            resolution: 128,
-            cube_size: 512,
-            distance_map_size: 256,
-            distance_test: true,
-            distance_tolerance: 0.05,
-            kernel_px: 4,
+method_params! {
+    /// Parameters of `splatting`: the photon-hit settings of `caustic-triangles` and
+    /// the kernel size.
+    pub struct SplattingParams {
+        group
+        /// The photon hit image, distance maps and cube map, as `caustic-triangles`.
+        hits: PhotonHitConfig;
+        /// splat kernel side in cube-map texels
+        kernel_px: u32 = 4 => closed(1.0, 64.0);
+    }
+    check = |p: &SplattingParams| {
+        if p.kernel_px > p.hits.cube_size {
+            Err(format!(
+                "kernel_px: expected at most cube_size ({}), got {}",
+                p.hits.cube_size, p.kernel_px
+            ))
+        } else {
+            Ok(())
         }
-    }
+    };
 }
 
-impl SplattingParams {
-    /// The shared photon-hit settings.
-    pub fn config(&self) -> PhotonHitConfig {
-        PhotonHitConfig {
-            resolution: self.resolution,
-            distance_map_size: self.distance_map_size,
-            cube_size: self.cube_size,
-            distance_test: self.distance_test,
-            distance_tolerance: self.distance_tolerance as f32,
-        }
+impl Method for Splatting {
+    type Params = SplattingParams;
+    const NAME: &'static str = NAME;
+    const SUMMARY: &'static str = "the caustic-mapping baseline: the photon hits of caustic-triangles splatted as fixed kernels into the same cube map";
+    const SOURCE: &'static str = "photon splatting as compared in Umenhoffer, Patow & Szirmay-Kalos, Caustic Triangles on the GPU, Fig. 1";
+    const CAPABILITIES: Capabilities = Capabilities {
+        surface: true,
+        volume: false,
+        reflection: true,
+        refraction: true,
+        multiple_bounces: false,
+        directional_light: true,
+        point_light: true,
+        spot_light: true,
+    };
+
+    fn check_scene(scene: &Scene, _params: &SplattingParams) -> Result<(), Unsupported> {
+        photon_hits::check_scene(scene)
     }
 
-    /// Range checks, with errors naming the parameter.
-    pub fn validate(&self) -> Result<(), MethodError> {
-        self.config().validate(NAME)?;
-        if !(1..=64).contains(&self.kernel_px) || self.kernel_px > self.cube_size {
-            return Err(MethodError::Param {
-                method: NAME,
-                message: format!(
-                    "kernel_px: expected an integer in 1..=64 and at most cube_size ({}), got {}",
-                    self.cube_size, self.kernel_px
-                ),
-            });
-        }
-        Ok(())
+    fn create(
+        ctx: &GpuContext,
+        renderer: &Renderer,
+        params: &SplattingParams,
+    ) -> Result<Box<dyn CausticsMethod>, MethodError> {
+        Ok(Box::new(Splatting::new(ctx, renderer, params)?))
     }
-}
-
-/// The registry entry.
-pub fn info() -> MethodInfo {
-    MethodInfo {
-        name: NAME,
-        summary: "the caustic-mapping baseline: the photon hits of caustic-triangles splatted as fixed kernels into the same cube map",
-        source: "photon splatting as compared in Umenhoffer, Patow & Szirmay-Kalos, Caustic Triangles on the GPU, Fig. 1",
-        capabilities: Capabilities {
-            surface: true,
-            volume: false,
-            reflection: true,
-            refraction: true,
-            multiple_bounces: false,
-            directional_light: true,
-            point_light: true,
-            spot_light: true,
-        },
-        params: || {
-            param_specs::<SplattingParams>(&[
-                ("resolution", "photon hit location image, texels per side"),
-                ("cube_size", "caustic cube map, texels per face side"),
-                (
-                    "distance_map_size",
-                    "distance maps of the generator and the receivers, texels per face side",
-                ),
-                (
-                    "distance_test",
-                    "accept caustic light only where the stored distance matches (false shows light leaks)",
-                ),
-                (
-                    "distance_tolerance",
-                    "distance test: |stored - actual| <= tolerance x actual",
-                ),
-                ("kernel_px", "splat kernel side in cube-map texels"),
-            ])
-        },
-        validate_params: |v| parse_params::<SplattingParams>(NAME, v)?.validate(),
-        check_scene,
-        create,
-    }
-}
-
-fn check_scene(scene: &Scene, _params: &serde_json::Value) -> Result<(), Unsupported> {
-    photon_hits::check_scene(scene)
-}
-
-fn create(
-    ctx: &GpuContext,
-    renderer: &Renderer,
-    params: &serde_json::Value,
-) -> Result<Box<dyn CausticsMethod>, MethodError> {
-    let p: SplattingParams = parse_params(NAME, params)?;
-    p.validate()?;
-    Ok(Box::new(Splatting::new(ctx, renderer, &p)?))
 }
 
 /// Matches `SplatUniform` in splat.wgsl.
@@ -177,8 +113,7 @@ struct SplatUniform {
 pub struct Splatting {
     hits: PhotonHits,
     map: CausticMap,
-    pipeline: wgpu::RenderPipeline,
-    bind: wgpu::BindGroup,
+    splat_pass: RasterPass,
     kernel_px: u32,
     bytes: u64,
 }
@@ -190,76 +125,35 @@ impl Splatting {
         renderer: &Renderer,
         params: &SplattingParams,
     ) -> Result<Self, MethodError> {
-        let config = params.config();
-        let hits = PhotonHits::new(ctx, renderer, NAME, &config)?;
-        let map = CausticMap::new(ctx, renderer, NAME, hits.center, hits.reach, &config)?;
-        let device = &ctx.device;
-        let (pipeline, bind, own_bytes) = ctx.checked("splatting setup", || {
-            let uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("splat params"),
-                contents: bytemuck::bytes_of(&SplatUniform {
-                    kernel_px: params.kernel_px,
-                    _pad: [0; 3],
-                }),
-                usage: wgpu::BufferUsages::UNIFORM,
-            });
-            let vf = wgpu::ShaderStages::VERTEX_FRAGMENT;
-            let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some("splat"),
-                entries: &[
-                    uniform_entry(0, vf),
-                    uniform_entry(1, vf),
-                    storage_entry(2, true, vf),
+        let hits = PhotonHits::new(ctx, renderer, NAME, &params.hits)?;
+        let map = CausticMap::new(ctx, renderer, NAME, hits.center, hits.reach, &params.hits)?;
+        let splat_uniform = ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("splat params"),
+            contents: bytemuck::bytes_of(&SplatUniform {
+                kernel_px: params.kernel_px,
+                _pad: [0; 3],
+            }),
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let shader = Shader::new(ctx, "splatting splat.wgsl", splat_source())?;
+        // All six faces in one pass: each hit is drawn once per face, clipped to it.
+        let splat_pass = RasterPass::builder(ctx, "splatting/splat", &shader, "vs_splat")
+            .frame(renderer)
+            .bind(
+                1,
+                &[
+                    ("cm", map.uniform()),
+                    ("sp", &splat_uniform),
+                    ("hits", &hits.hits),
                 ],
-            });
-            let bind = buffers_bind_group(
-                device,
-                "splat",
-                &layout,
-                &[map.uniform(), &uniform, &hits.hits],
-            );
-            let module = shader::module(
-                device,
-                "splatting splat.wgsl",
-                photon_hits::compose(SPLAT_WGSL),
-            );
-            let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some("splat"),
-                bind_group_layouts: &[Some(renderer.frame_layout()), Some(&layout)],
-                immediate_size: 0,
-            });
-            let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some("splat"),
-                layout: Some(&pipeline_layout),
-                vertex: wgpu::VertexState {
-                    module: &module,
-                    entry_point: Some("vs_splat"),
-                    compilation_options: Default::default(),
-                    buffers: &[],
-                },
-                primitive: wgpu::PrimitiveState {
-                    cull_mode: None,
-                    ..Default::default()
-                },
-                depth_stencil: None,
-                multisample: Default::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module: &module,
-                    entry_point: Some("fs_splat"),
-                    compilation_options: Default::default(),
-                    targets: &[Some(additive_hdr_target())],
-                }),
-                multiview_mask: None,
-                cache: None,
-            });
-            (pipeline, bind, uniform.size())
-        })?;
-        let bytes = own_bytes + hits.bytes() + map.bytes();
+            )
+            .fragment("fs_splat", &[Some(additive_hdr_target())])
+            .build()?;
+        let bytes = splat_uniform.size() + hits.bytes() + map.bytes();
         Ok(Self {
             hits,
             map,
-            pipeline,
-            bind,
+            splat_pass,
             kernel_px: params.kernel_px,
             bytes,
         })
@@ -278,13 +172,10 @@ impl Splatting {
 
 impl CausticsMethod for Splatting {
     fn record(&mut self, frame: &mut Frame<'_>) -> Result<(), MethodError> {
-        let renderer = frame.renderer;
         self.hits.record(frame)?;
         {
-            let mut pass = self.map.begin_reconstruction(frame, "splatting/splat")?;
-            pass.set_pipeline(&self.pipeline);
-            pass.set_bind_group(0, renderer.frame_bind_group(), &[]);
-            pass.set_bind_group(1, &self.bind, &[]);
+            let target = self.map.reconstruction_attachment();
+            let mut pass = self.splat_pass.begin(frame, &target, None)?;
             for face in 0..6 {
                 self.map.set_face(&mut pass, face);
                 pass.draw(0..6 * self.hits.texels(), face..face + 1);
@@ -304,13 +195,23 @@ impl CausticsMethod for Splatting {
     }
 }
 
+fn splat_source() -> String {
+    photon_hits::compose(SPLAT_WGSL)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+    use caustics_method::params::parse;
 
     #[test]
     fn shader_validates() -> Result<(), String> {
-        shader::validate_wgsl("splat.wgsl", &photon_hits::compose(SPLAT_WGSL))
+        shader::validate_wgsl("splat.wgsl", &splat_source())
+    }
+
+    #[test]
+    fn splat_uniform_matches_its_wgsl() {
+        caustics_gpu::assert_wgsl_layout!(splat_source(), SplatUniform { kernel_px });
     }
 
     #[test]
@@ -325,11 +226,11 @@ mod tests {
             (serde_json::json!({"resolution": 5000}), "resolution"),
             (serde_json::json!({"max_stretch": 4}), "known parameters"),
         ] {
-            let e =
-                parse_params::<SplattingParams>(NAME, &json).and_then(|p| p.validate().map(|_| p));
-            let msg = e.expect_err("must fail").to_string();
+            let msg = parse::<SplattingParams>(NAME, &json)
+                .expect_err("must fail")
+                .to_string();
             assert!(msg.contains(needle) && msg.contains(NAME), "{msg}");
         }
-        assert!(SplattingParams::default().validate().is_ok());
+        assert!(parse::<SplattingParams>(NAME, &serde_json::Value::Null).is_ok());
     }
 }

@@ -7,6 +7,14 @@ const INV_PI: f32 = 0.31830988618379;
 const NO_HIT: f32 = 3.0e38;
 const NONE: u32 = 0xffffffffu;
 
+// The vertex stage of every full-screen pass (`caustics_gpu::pass::RasterPass::fullscreen`):
+// one triangle covering the viewport, drawn with 3 vertices.
+@vertex
+fn vs_fullscreen(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
+    let uv = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u));
+    return vec4<f32>(uv * 2.0 - 1.0, 0.0, 1.0);
+}
+
 const OBJ_SPHERE: u32 = 0u;
 const OBJ_QUAD: u32 = 1u;
 const OBJ_HEIGHTFIELD: u32 = 2u;

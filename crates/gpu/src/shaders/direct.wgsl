@@ -19,12 +19,6 @@ struct DirectLight {
 @group(0) @binding(5) var shadow_map: texture_depth_2d_array;
 @group(0) @binding(6) var shadow_sampler: sampler_comparison;
 
-@vertex
-fn vs_fullscreen(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
-    let uv = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u));
-    return vec4<f32>(uv * 2.0 - 1.0, 0.0, 1.0);
-}
-
 // Cube face order +X, -X, +Y, -Y, +Z, -Z (as `LightView::faces`).
 fn cube_face(d: vec3<f32>) -> u32 {
     let a = abs(d);
