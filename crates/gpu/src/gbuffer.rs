@@ -7,8 +7,9 @@ use bytemuck::{Pod, Zeroable};
 use caustics_scene::{Aabb, Camera, Light, Mat4, Vec3};
 use wgpu::util::DeviceExt;
 
-use crate::GpuError;
 use crate::frame::Frame;
+use crate::pass::{BindGroupSchema, RasterPass, Shader};
+use crate::{GpuContext, GpuError};
 use crate::scene_upload::{GpuScene, SceneVertex};
 use crate::shader;
 use crate::textures::{DEPTH_FORMAT, IDS_FORMAT, NORMAL_FORMAT, POSITION_FORMAT, Target};
@@ -282,40 +283,17 @@ impl ShadowMap {
     }
 }
 
-/// The G-buffer rasterization pipelines (full and depth-only), shared by camera and
-/// light views.
+/// The G-buffer rasterization passes (full and depth-only), shared by camera and
+/// light views; each view's uniform is the pass's group 0, set per layer.
 pub struct GBufferPass {
-    pipeline: wgpu::RenderPipeline,
-    depth_pipeline: wgpu::RenderPipeline,
-    layout: wgpu::BindGroupLayout,
+    full: RasterPass,
+    depth_only: RasterPass,
 }
 
 impl GBufferPass {
-    /// Builds the pipeline.
-    pub fn new(device: &wgpu::Device) -> Self {
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("gbuffer view"),
-            entries: &[wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: wgpu::ShaderStages::VERTEX,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                count: None,
-            }],
-        });
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("gbuffer"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
-        let module = shader::module(
-            device,
-            "gbuffer.wgsl",
-            shader::compose(shader::GBUFFER_WGSL),
-        );
+    /// Builds both passes.
+    pub fn new(ctx: &GpuContext) -> Result<Self, GpuError> {
+        let shader = Shader::new(ctx, "gbuffer.wgsl", shader::compose(shader::GBUFFER_WGSL))?;
         let target = |format| {
             Some(wgpu::ColorTargetState {
                 format,
@@ -323,61 +301,34 @@ impl GBufferPass {
                 write_mask: wgpu::ColorWrites::ALL,
             })
         };
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("gbuffer"),
-            layout: Some(&pipeline_layout),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &[Some(SceneVertex::LAYOUT)],
-            },
-            primitive: wgpu::PrimitiveState {
-                topology: wgpu::PrimitiveTopology::TriangleList,
-                front_face: wgpu::FrontFace::Ccw,
-                // Open cylinders, quads and heightfields are seen from both sides.
-                cull_mode: None,
-                ..Default::default()
-            },
-            depth_stencil: Some(depth_state()),
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_main"),
-                compilation_options: Default::default(),
-                targets: &[
+        // Open cylinders, quads and heightfields are seen from both sides: no culling.
+        let vertex_buffers = [Some(SceneVertex::LAYOUT)];
+        let full = RasterPass::builder(ctx, "gbuffer", &shader, "vs_main")
+            .caller_group(0)
+            .vertex_buffers(&vertex_buffers)
+            .depth_stencil(depth_state())
+            .fragment(
+                "fs_main",
+                &[
                     target(POSITION_FORMAT),
                     target(NORMAL_FORMAT),
                     target(IDS_FORMAT),
                 ],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
-        let depth_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("shadow map"),
-            layout: Some(&pipeline_layout),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &[Some(SceneVertex::LAYOUT)],
-            },
-            primitive: wgpu::PrimitiveState {
-                cull_mode: None,
-                ..Default::default()
-            },
-            depth_stencil: Some(depth_state()),
-            multisample: Default::default(),
-            fragment: None,
-            multiview_mask: None,
-            cache: None,
-        });
-        Self {
-            pipeline,
-            depth_pipeline,
-            layout,
-        }
+            )
+            .build()?;
+        let depth_only = RasterPass::builder(ctx, "shadow map", &shader, "vs_main")
+            .caller_group(0)
+            .vertex_buffers(&vertex_buffers)
+            .depth_stencil(depth_state())
+            .build()?;
+        Ok(Self { full, depth_only })
+    }
+
+    fn view_schema(&self) -> Result<&BindGroupSchema, GpuError> {
+        // Both passes share the shader, so either's group 0 layout serves.
+        self.full
+            .schema(0)
+            .ok_or_else(|| GpuError::Invalid("gbuffer.wgsl declares no group 0".into()))
     }
 
     fn view_binds(
@@ -385,7 +336,7 @@ impl GBufferPass {
         device: &wgpu::Device,
         label: &str,
         views: &[ViewUniform],
-    ) -> Vec<(wgpu::Buffer, wgpu::BindGroup)> {
+    ) -> Result<Vec<(wgpu::Buffer, wgpu::BindGroup)>, GpuError> {
         views
             .iter()
             .map(|v| {
@@ -394,24 +345,21 @@ impl GBufferPass {
                     contents: bytemuck::bytes_of(v),
                     usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
                 });
-                let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some(label),
-                    layout: &self.layout,
-                    entries: &[wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: buffer.as_entire_binding(),
-                    }],
-                });
-                (buffer, bind)
+                let bind = self.view_schema()?.bind(device, &[("view", &buffer)])?;
+                Ok((buffer, bind))
             })
             .collect()
     }
 
     /// Allocates a depth-only view of the light (the shadow map), one layer per face.
-    pub fn shadow_map(&self, device: &wgpu::Device, view: &LightView) -> ShadowMap {
+    pub fn shadow_map(
+        &self,
+        device: &wgpu::Device,
+        view: &LightView,
+    ) -> Result<ShadowMap, GpuError> {
         let layers = view.faces.len() as u32;
         let res = view.resolution;
-        ShadowMap {
+        Ok(ShadowMap {
             depth: Target::new(
                 device,
                 "shadow map",
@@ -421,9 +369,9 @@ impl GBufferPass {
                 layers,
                 wgpu::TextureUsages::empty(),
             ),
-            views: self.view_binds(device, "shadow map", &light_view_uniforms(view)),
+            views: self.view_binds(device, "shadow map", &light_view_uniforms(view))?,
             size: (res, res),
-        }
+        })
     }
 
     /// Records the depth of every object into each layer of `shadow`.
@@ -435,16 +383,9 @@ impl GBufferPass {
         shadow: &ShadowMap,
     ) -> Result<(), GpuError> {
         for (layer, (_, bind)) in shadow.views.iter().enumerate() {
-            let desc = wgpu::RenderPassDescriptor {
-                label: None,
-                color_attachments: &[],
-                depth_stencil_attachment: Some(clear_depth(&shadow.depth.layer_views[layer])),
-                timestamp_writes: None,
-                occlusion_query_set: None,
-                multiview_mask: None,
-            };
-            let mut pass = frame.render_pass(name, desc)?;
-            draw_scene(&mut pass, &self.depth_pipeline, bind, scene);
+            let depth = clear_depth(&shadow.depth.layer_views[layer]);
+            let mut pass = self.depth_only.begin_as(frame, name, &[], Some(depth))?;
+            draw_scene(&mut pass, bind, scene);
         }
         Ok(())
     }
@@ -456,11 +397,11 @@ impl GBufferPass {
         width: u32,
         height: u32,
         views: &[ViewUniform],
-    ) -> GBuffer {
+    ) -> Result<GBuffer, GpuError> {
         let layers = views.len() as u32;
         let none = wgpu::TextureUsages::empty();
-        let views = self.view_binds(device, label, views);
-        GBuffer {
+        let views = self.view_binds(device, label, views)?;
+        Ok(GBuffer {
             position: Target::new(
                 device,
                 &format!("{label} position"),
@@ -499,7 +440,7 @@ impl GBufferPass {
             ),
             views,
             size: (width, height),
-        }
+        })
     }
 
     /// Allocates the camera G-buffer at the camera's resolution.
@@ -509,7 +450,7 @@ impl GBufferPass {
         camera: &Camera,
         near: f32,
         far: f32,
-    ) -> GBuffer {
+    ) -> Result<GBuffer, GpuError> {
         let vp = camera.projection(near, far) * camera.view();
         let u = ViewUniform {
             view_proj: vp.to_cols_array_2d(),
@@ -519,7 +460,11 @@ impl GBufferPass {
     }
 
     /// Allocates a light G-buffer, one layer per face of `view`.
-    pub fn light_gbuffer(&self, device: &wgpu::Device, view: &LightView) -> GBuffer {
+    pub fn light_gbuffer(
+        &self,
+        device: &wgpu::Device,
+        view: &LightView,
+    ) -> Result<GBuffer, GpuError> {
         self.allocate(
             device,
             "light gbuffer",
@@ -570,28 +515,15 @@ impl GBufferPass {
                     },
                 ),
             ];
-            let desc = wgpu::RenderPassDescriptor {
-                label: None,
-                color_attachments: &attachments,
-                depth_stencil_attachment: Some(clear_depth(&gbuffer.depth.layer_views[layer])),
-                timestamp_writes: None,
-                occlusion_query_set: None,
-                multiview_mask: None,
-            };
-            let mut pass = frame.render_pass(name, desc)?;
-            draw_scene(&mut pass, &self.pipeline, bind, scene);
+            let depth = clear_depth(&gbuffer.depth.layer_views[layer]);
+            let mut pass = self.full.begin_as(frame, name, &attachments, Some(depth))?;
+            draw_scene(&mut pass, bind, scene);
         }
         Ok(())
     }
 }
 
-fn draw_scene(
-    pass: &mut wgpu::RenderPass<'_>,
-    pipeline: &wgpu::RenderPipeline,
-    view: &wgpu::BindGroup,
-    scene: &GpuScene,
-) {
-    pass.set_pipeline(pipeline);
+fn draw_scene(pass: &mut wgpu::RenderPass<'_>, view: &wgpu::BindGroup, scene: &GpuScene) {
     pass.set_bind_group(0, view, &[]);
     pass.set_vertex_buffer(0, scene.vertex_buffer.slice(..));
     pass.set_index_buffer(scene.index_buffer.slice(..), wgpu::IndexFormat::Uint32);

@@ -14,9 +14,9 @@ use bytemuck::{Pod, Zeroable};
 use caustics_scene::{Aabb, Mat4, Vec3, Vec4};
 use wgpu::util::DeviceExt;
 
-use crate::GpuError;
-use crate::binding::uniform_entry;
 use crate::frame::Frame;
+use crate::pass::{RasterPass, Shader};
+use crate::{GpuContext, GpuError};
 use crate::scene_upload::{GpuScene, SceneVertex};
 use crate::shader;
 use crate::textures::{DEPTH_FORMAT, Target};
@@ -104,32 +104,20 @@ pub fn objects_bounds(scene: &GpuScene, objects: &[usize]) -> Option<Aabb> {
     bounds
 }
 
-/// The impostor render pipeline (one per device).
+/// The impostor render pass (one per renderer: [`crate::Renderer::impostor_pass`]);
+/// each face's view uniform is its group 0, set per face.
 pub struct ImpostorPass {
-    pipeline: wgpu::RenderPipeline,
-    layout: wgpu::BindGroupLayout,
+    pass: RasterPass,
 }
 
 impl ImpostorPass {
-    /// Builds the pipeline.
-    pub fn new(device: &wgpu::Device) -> Self {
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("impostor view"),
-            entries: &[uniform_entry(
-                0,
-                wgpu::ShaderStages::VERTEX | wgpu::ShaderStages::FRAGMENT,
-            )],
-        });
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("impostor"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
-        let module = shader::module(
-            device,
+    /// Builds the pass.
+    pub fn new(ctx: &GpuContext) -> Result<Self, GpuError> {
+        let shader = Shader::new(
+            ctx,
             "impostor_render.wgsl",
             shader::compose(IMPOSTOR_RENDER_WGSL),
-        );
+        )?;
         let target = |format| {
             Some(wgpu::ColorTargetState {
                 format,
@@ -137,37 +125,23 @@ impl ImpostorPass {
                 write_mask: wgpu::ColorWrites::ALL,
             })
         };
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("distance impostor"),
-            layout: Some(&pipeline_layout),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &[Some(SceneVertex::LAYOUT)],
-            },
-            primitive: wgpu::PrimitiveState {
-                cull_mode: None,
-                ..Default::default()
-            },
-            depth_stencil: Some(wgpu::DepthStencilState {
+        let vertex_buffers = [Some(SceneVertex::LAYOUT)];
+        let pass = RasterPass::builder(ctx, "distance impostor", &shader, "vs_main")
+            .caller_group(0)
+            .vertex_buffers(&vertex_buffers)
+            .depth_stencil(wgpu::DepthStencilState {
                 format: DEPTH_FORMAT,
                 depth_write_enabled: Some(true),
                 depth_compare: Some(wgpu::CompareFunction::Less),
                 stencil: Default::default(),
                 bias: Default::default(),
-            }),
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_main"),
-                compilation_options: Default::default(),
-                targets: &[target(IMPOSTOR_FORMAT), target(IMPOSTOR_IDS_FORMAT)],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
-        Self { pipeline, layout }
+            })
+            .fragment(
+                "fs_main",
+                &[target(IMPOSTOR_FORMAT), target(IMPOSTOR_IDS_FORMAT)],
+            )
+            .build()?;
+        Ok(Self { pass })
     }
 
     /// Allocates an impostor of `objects` around the centre of their bounds.
@@ -199,7 +173,7 @@ impl ImpostorPass {
             return Err(GpuError::Invalid("distance impostor resolution 0".into()));
         }
         let reach = reach_from(&bounds, center);
-        let views = self.face_binds(device, center, reach);
+        let views = self.face_binds(device, center, reach)?;
         let none = wgpu::TextureUsages::empty();
         Ok(DistanceImpostor {
             normal_distance: Target::new(
@@ -290,7 +264,7 @@ impl ImpostorPass {
                 objects: objects.clone(),
                 center,
                 reach,
-                views: self.face_binds(device, center, reach),
+                views: self.face_binds(device, center, reach)?,
             });
         }
         let layers = 6 * entries.len() as u32;
@@ -349,7 +323,7 @@ impl ImpostorPass {
         device: &wgpu::Device,
         center: Vec3,
         reach: f32,
-    ) -> Vec<(wgpu::Buffer, wgpu::BindGroup)> {
+    ) -> Result<Vec<(wgpu::Buffer, wgpu::BindGroup)>, GpuError> {
         let far = reach * 1.01 + 1e-3;
         let near = (far * 1e-5).max(1e-5);
         (0..6)
@@ -363,15 +337,11 @@ impl ImpostorPass {
                     contents: bytemuck::bytes_of(&uniform),
                     usage: wgpu::BufferUsages::UNIFORM,
                 });
-                let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some("impostor view"),
-                    layout: &self.layout,
-                    entries: &[wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: buffer.as_entire_binding(),
-                    }],
-                });
-                (buffer, bind)
+                let schema = self.pass.schema(0).ok_or_else(|| {
+                    GpuError::Invalid("impostor_render.wgsl declares no group 0".into())
+                })?;
+                let bind = schema.bind(device, &[("view", &buffer)])?;
+                Ok((buffer, bind))
             })
             .collect()
     }
@@ -399,23 +369,15 @@ impl ImpostorPass {
             })
         };
         let attachments = [clear(colors[0]), clear(colors[1])];
-        let desc = wgpu::RenderPassDescriptor {
-            label: None,
-            color_attachments: &attachments,
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: depth,
-                depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(1.0),
-                    store: wgpu::StoreOp::Discard,
-                }),
-                stencil_ops: None,
+        let depth = wgpu::RenderPassDepthStencilAttachment {
+            view: depth,
+            depth_ops: Some(wgpu::Operations {
+                load: wgpu::LoadOp::Clear(1.0),
+                store: wgpu::StoreOp::Discard,
             }),
-            timestamp_writes: None,
-            occlusion_query_set: None,
-            multiview_mask: None,
+            stencil_ops: None,
         };
-        let mut pass = frame.render_pass(name, desc)?;
-        pass.set_pipeline(&self.pipeline);
+        let mut pass = self.pass.begin_as(frame, name, &attachments, Some(depth))?;
         pass.set_bind_group(0, bind, &[]);
         pass.set_vertex_buffer(0, scene.vertex_buffer.slice(..));
         pass.set_index_buffer(scene.index_buffer.slice(..), wgpu::IndexFormat::Uint32);

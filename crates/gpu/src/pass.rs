@@ -386,6 +386,45 @@ impl BindGroupSchema {
         }
     }
 
+    /// The layout of `group` of `shader` with the visibility `visibility(binding)`
+    /// instead of the stages that use it: for a group shared by passes that are not in
+    /// this module (the renderer's group 0, declared in frame.wgsl).
+    pub fn with_visibility(
+        device: &wgpu::Device,
+        shader: &Shader,
+        group: u32,
+        visibility: impl Fn(&ReflectedBinding) -> wgpu::ShaderStages,
+    ) -> Self {
+        let label = format!("{} group {group}", shader.label);
+        let bindings: Vec<ReflectedBinding> = shader
+            .reflection
+            .group(group)
+            .iter()
+            .map(|b| ReflectedBinding {
+                visibility: visibility(b),
+                ..b.clone()
+            })
+            .collect();
+        let entries: Vec<_> = bindings
+            .iter()
+            .map(|b| wgpu::BindGroupLayoutEntry {
+                binding: b.binding,
+                visibility: b.visibility,
+                ty: b.ty,
+                count: None,
+            })
+            .collect();
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some(&label),
+            entries: &entries,
+        });
+        Self {
+            label,
+            layout,
+            bindings,
+        }
+    }
+
     /// The layout.
     pub fn layout(&self) -> &wgpu::BindGroupLayout {
         &self.layout
@@ -814,13 +853,26 @@ impl RasterPass {
         color: &[Option<wgpu::RenderPassColorAttachment<'_>>],
         depth: Option<wgpu::RenderPassDepthStencilAttachment<'_>>,
     ) -> Result<RasterRecorder<'f>, GpuError> {
+        self.begin_as(frame, &self.name, color, depth)
+    }
+
+    /// [`RasterPass::begin`] profiled under another name: for a pass that several
+    /// owners record (the G-buffer pass of a method's light view is
+    /// `"<method>/light_gbuffer"`, the renderer's own is `"base/gbuffer"`).
+    pub fn begin_as<'f>(
+        &'f self,
+        frame: &'f mut Frame<'_>,
+        name: &str,
+        color: &[Option<wgpu::RenderPassColorAttachment<'_>>],
+        depth: Option<wgpu::RenderPassDepthStencilAttachment<'_>>,
+    ) -> Result<RasterRecorder<'f>, GpuError> {
         let renderer = frame.renderer;
         let pipeline = match (&self.counting, frame.counting()) {
             (Some(counting), true) => counting,
             _ => &self.timed,
         };
         let mut pass = frame.render_pass(
-            &self.name,
+            name,
             wgpu::RenderPassDescriptor {
                 label: None,
                 color_attachments: color,

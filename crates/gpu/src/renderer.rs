@@ -6,8 +6,11 @@ use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3};
 use wgpu::util::DeviceExt;
 
-use crate::binding::{entry, storage_entry};
+use std::sync::OnceLock;
+
 use crate::frame::Frame;
+use crate::impostor::ImpostorPass;
+use crate::pass::{BindGroupSchema, RasterPass, Shader};
 use crate::gbuffer::{GBuffer, GBufferPass, LightProjection, LightView, ShadowMap, ViewUniform};
 use crate::profiling::{FrameMode, PassProfiler};
 use crate::scene_upload::{GpuLight, GpuScene, gpu_light};
@@ -99,31 +102,20 @@ pub struct Renderer {
     device: wgpu::Device,
     scene: GpuScene,
     gbuffer_pass: GBufferPass,
+    impostor_pass: OnceLock<ImpostorPass>,
     camera_gbuffer: GBuffer,
     lights: Vec<LightShadow>,
-    direct_pipeline: wgpu::RenderPipeline,
+    direct_pass: RasterPass,
     targets: RadianceTargets,
     frame_uniforms: FrameUniforms,
     frame_buffer: wgpu::Buffer,
     /// Camera world → view and view → clip, unshifted (see [`Renderer::set_subpixel_offset`]).
     camera_view: Mat4,
     camera_projection: Mat4,
-    frame_layout: wgpu::BindGroupLayout,
+    frame_schema: BindGroupSchema,
     frame_bind: wgpu::BindGroup,
     fill_counts: wgpu::Buffer,
     bytes: u64,
-}
-
-fn texture_entry(binding: u32, sample_type: wgpu::TextureSampleType) -> wgpu::BindGroupLayoutEntry {
-    entry(
-        binding,
-        wgpu::ShaderStages::VERTEX_FRAGMENT | wgpu::ShaderStages::COMPUTE,
-        wgpu::BindingType::Texture {
-            sample_type,
-            view_dimension: wgpu::TextureViewDimension::D2,
-            multisampled: false,
-        },
-    )
 }
 
 impl Renderer {
@@ -133,10 +125,14 @@ impl Renderer {
         scene: GpuScene,
         options: RendererOptions,
     ) -> Result<Self, GpuError> {
-        ctx.checked("base renderer setup", || Self::build(ctx, scene, options))
+        ctx.checked("base renderer setup", || Self::build(ctx, scene, options))?
     }
 
-    fn build(ctx: &GpuContext, scene: GpuScene, options: RendererOptions) -> Self {
+    fn build(
+        ctx: &GpuContext,
+        scene: GpuScene,
+        options: RendererOptions,
+    ) -> Result<Self, GpuError> {
         let device = &ctx.device;
         let sc = &scene.scene;
         let cam = &sc.camera;
@@ -150,39 +146,27 @@ impl Renderer {
         let far = far * 1.05 + 1e-2;
         let near = (far * 1e-4).max(1e-3);
 
-        let gbuffer_pass = GBufferPass::new(device);
-        let camera_gbuffer = gbuffer_pass.camera_gbuffer(device, cam, near, far);
+        let gbuffer_pass = GBufferPass::new(ctx)?;
+        let camera_gbuffer = gbuffer_pass.camera_gbuffer(device, cam, near, far)?;
         let (camera_view, camera_projection) = (cam.view(), cam.projection(near, far));
         let targets = RadianceTargets::new(device, w, h);
 
-        // Group 0 of method passes.
-        let all = wgpu::ShaderStages::VERTEX_FRAGMENT | wgpu::ShaderStages::COMPUTE;
-        let frame_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("frame (group 0)"),
-            entries: &[
-                entry(
-                    0,
-                    all,
-                    wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Uniform,
-                        has_dynamic_offset: false,
-                        min_binding_size: None,
-                    },
-                ),
-                texture_entry(1, wgpu::TextureSampleType::Float { filterable: false }),
-                texture_entry(2, wgpu::TextureSampleType::Float { filterable: false }),
-                texture_entry(3, wgpu::TextureSampleType::Uint),
-                storage_entry(4, true, all),
-                storage_entry(5, true, all),
-                storage_entry(6, true, all),
-                storage_entry(7, true, all),
-                // Vertex stages may not write storage without VERTEX_WRITABLE_STORAGE.
-                storage_entry(
-                    8,
-                    false,
-                    wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE,
-                ),
-            ],
+        // Group 0 of method passes, reflected from frame.wgsl; visible to every stage
+        // of every method pass (vertex stages may not write storage).
+        let frame_shader = Shader::new(ctx, "frame.wgsl", shader::compose_method(""))?;
+        let frame_schema = BindGroupSchema::with_visibility(device, &frame_shader, 0, |b| {
+            let writable = matches!(
+                b.ty,
+                wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Storage { read_only: false },
+                    ..
+                }
+            );
+            if writable {
+                wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE
+            } else {
+                wgpu::ShaderStages::VERTEX_FRAGMENT | wgpu::ShaderStages::COMPUTE
+            }
         });
         let frame_uniforms = FrameUniforms {
             view_proj: (camera_projection * camera_view).to_cols_array_2d(),
@@ -209,83 +193,35 @@ impl Renderer {
                 | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let frame_bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("frame (group 0)"),
-            layout: &frame_layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: frame_buffer.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: wgpu::BindingResource::TextureView(&camera_gbuffer.position.view),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 2,
-                    resource: wgpu::BindingResource::TextureView(&camera_gbuffer.normal.view),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 3,
-                    resource: wgpu::BindingResource::TextureView(&camera_gbuffer.ids.view),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 4,
-                    resource: scene.objects_buffer.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 5,
-                    resource: scene.materials_buffer.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 6,
-                    resource: scene.lights_buffer.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 7,
-                    resource: scene.waves_buffer.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 8,
-                    resource: fill_counts.as_entire_binding(),
-                },
+        let frame_bind = frame_schema.bind(
+            device,
+            &[
+                ("frame", &frame_buffer),
+                ("gbuf_position", &camera_gbuffer.position.view),
+                ("gbuf_normal", &camera_gbuffer.normal.view),
+                ("gbuf_ids", &camera_gbuffer.ids.view),
+                ("objects", &scene.objects_buffer),
+                ("materials", &scene.materials_buffer),
+                ("lights", &scene.lights_buffer),
+                ("waves", &scene.waves_buffer),
+                ("fill_counts", &fill_counts),
             ],
-        });
+        )?;
 
         // Direct lighting: one draw per light, shadowed by that light's G-buffer depth.
-        let frag = wgpu::ShaderStages::FRAGMENT;
-        let direct_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("direct"),
-            entries: &[
-                texture_entry(0, wgpu::TextureSampleType::Float { filterable: false }),
-                texture_entry(1, wgpu::TextureSampleType::Float { filterable: false }),
-                texture_entry(2, wgpu::TextureSampleType::Uint),
-                storage_entry(3, true, frag),
-                entry(
-                    4,
-                    frag,
-                    wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Uniform,
-                        has_dynamic_offset: false,
-                        min_binding_size: None,
-                    },
-                ),
-                entry(
-                    5,
-                    frag,
-                    wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Depth,
-                        view_dimension: wgpu::TextureViewDimension::D2Array,
-                        multisampled: false,
-                    },
-                ),
-                entry(
-                    6,
-                    frag,
-                    wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Comparison),
-                ),
-            ],
-        });
+        let direct_shader = Shader::new(ctx, "direct.wgsl", shader::compose(shader::DIRECT_WGSL))?;
+        let direct_pass = RasterPass::fullscreen(
+            ctx,
+            "base/direct",
+            &direct_shader,
+            "fs_main",
+            &[Some(additive_hdr_target())],
+        )
+        .caller_group(0)
+        .build()?;
+        let direct_schema = direct_pass
+            .schema(0)
+            .ok_or_else(|| GpuError::Invalid("direct.wgsl declares no group 0".into()))?;
         let shadow_sampler = device.create_sampler(&wgpu::SamplerDescriptor {
             label: Some("shadow"),
             mag_filter: wgpu::FilterMode::Linear,
@@ -304,7 +240,7 @@ impl Renderer {
                     options.shadow_resolution
                 };
                 let view = LightView::fit(light, &bounds, res);
-                let shadow = gbuffer_pass.shadow_map(device, &view);
+                let shadow = gbuffer_pass.shadow_map(device, &view)?;
                 let mut faces = [[[0.0f32; 4]; 4]; 6];
                 for (i, f) in view.faces.iter().enumerate() {
                     faces[i] = f.view_proj.to_cols_array_2d();
@@ -329,102 +265,48 @@ impl Renderer {
                     usage: wgpu::BufferUsages::UNIFORM,
                 });
                 let shadow_view = shadow.depth.array_view();
-                let direct_bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some("direct"),
-                    layout: &direct_layout,
-                    entries: &[
-                        wgpu::BindGroupEntry {
-                            binding: 0,
-                            resource: wgpu::BindingResource::TextureView(
-                                &camera_gbuffer.position.view,
-                            ),
-                        },
-                        wgpu::BindGroupEntry {
-                            binding: 1,
-                            resource: wgpu::BindingResource::TextureView(
-                                &camera_gbuffer.normal.view,
-                            ),
-                        },
-                        wgpu::BindGroupEntry {
-                            binding: 2,
-                            resource: wgpu::BindingResource::TextureView(&camera_gbuffer.ids.view),
-                        },
-                        wgpu::BindGroupEntry {
-                            binding: 3,
-                            resource: scene.materials_buffer.as_entire_binding(),
-                        },
-                        wgpu::BindGroupEntry {
-                            binding: 4,
-                            resource: buffer.as_entire_binding(),
-                        },
-                        wgpu::BindGroupEntry {
-                            binding: 5,
-                            resource: wgpu::BindingResource::TextureView(&shadow_view),
-                        },
-                        wgpu::BindGroupEntry {
-                            binding: 6,
-                            resource: wgpu::BindingResource::Sampler(&shadow_sampler),
-                        },
+                let direct_bind = direct_schema.bind(
+                    device,
+                    &[
+                        ("gbuf_position", &camera_gbuffer.position.view),
+                        ("gbuf_normal", &camera_gbuffer.normal.view),
+                        ("gbuf_ids", &camera_gbuffer.ids.view),
+                        ("materials", &scene.materials_buffer),
+                        ("dl", &buffer),
+                        ("shadow_map", &shadow_view),
+                        ("shadow_sampler", &shadow_sampler),
                     ],
-                });
-                LightShadow {
+                )?;
+                Ok(LightShadow {
                     view,
                     shadow,
                     direct_bind,
-                }
+                })
             })
-            .collect::<Vec<_>>();
-        let direct_module =
-            shader::module(device, "direct.wgsl", shader::compose(shader::DIRECT_WGSL));
-        let direct_pipeline_layout =
-            device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some("direct"),
-                bind_group_layouts: &[Some(&direct_layout)],
-                immediate_size: 0,
-            });
-        let direct_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("direct"),
-            layout: Some(&direct_pipeline_layout),
-            vertex: wgpu::VertexState {
-                module: &direct_module,
-                entry_point: Some("vs_fullscreen"),
-                compilation_options: Default::default(),
-                buffers: &[],
-            },
-            primitive: Default::default(),
-            depth_stencil: None,
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &direct_module,
-                entry_point: Some("fs_main"),
-                compilation_options: Default::default(),
-                targets: &[Some(additive_hdr_target())],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+            .collect::<Result<Vec<_>, GpuError>>()?;
         let bytes = scene.bytes
             + camera_gbuffer.bytes()
             + targets.bytes()
             + fill_counts.size()
             + lights.iter().map(|l| l.shadow.bytes()).sum::<u64>();
-        Self {
+        Ok(Self {
             device: device.clone(),
             scene,
             gbuffer_pass,
+            impostor_pass: OnceLock::new(),
             camera_gbuffer,
             lights,
-            direct_pipeline,
+            direct_pass,
             targets,
             frame_uniforms,
             frame_buffer,
             camera_view,
             camera_projection,
-            frame_layout,
+            frame_schema,
             frame_bind,
             fill_counts,
             bytes,
-        }
+        })
     }
 
     pub(crate) fn ctx_device(&self) -> &wgpu::Device {
@@ -496,7 +378,7 @@ impl Renderer {
 
     /// Layout of group 0 (frame.wgsl), for method pipeline layouts.
     pub fn frame_layout(&self) -> &wgpu::BindGroupLayout {
-        &self.frame_layout
+        self.frame_schema.layout()
     }
 
     /// The group-0 bind group.
@@ -507,6 +389,16 @@ impl Renderer {
     /// The G-buffer pass, for methods that rasterize their own light views.
     pub fn gbuffer_pass(&self) -> &GBufferPass {
         &self.gbuffer_pass
+    }
+
+    /// The distance-impostor pass (built on first use: only methods that trace
+    /// impostors need it).
+    pub fn impostor_pass(&self, ctx: &GpuContext) -> Result<&ImpostorPass, GpuError> {
+        if let Some(pass) = self.impostor_pass.get() {
+            return Ok(pass);
+        }
+        let pass = ImpostorPass::new(ctx)?;
+        Ok(self.impostor_pass.get_or_init(|| pass))
     }
 
     /// Bytes of GPU memory owned by the base renderer (scene, G-buffers, targets).
@@ -560,10 +452,9 @@ impl Renderer {
         }
         for light in &self.lights {
             let attachments = [load_attachment(&self.targets.direct.view)];
-            let mut pass = frame.render_pass("base/direct", pass_desc(&attachments))?;
-            pass.set_pipeline(&self.direct_pipeline);
+            let mut pass = self.direct_pass.begin(&mut frame, &attachments, None)?;
             pass.set_bind_group(0, &light.direct_bind, &[]);
-            pass.draw(0..3, 0..1);
+            pass.draw_fullscreen();
         }
         Ok(frame)
     }

@@ -10,10 +10,10 @@
 //! ([`ScoreAccumulator`]): the mean converges to the box filter as `N` grows. The
 //! scoring frames come after the timed frames and are never timed.
 
-use crate::binding::{storage_entry, texture_binding, texture_entry};
 use crate::frame::Frame;
+use crate::pass::{ComputePass, Shader};
 use crate::renderer::Renderer;
-use crate::{GpuContext, GpuError, shader};
+use crate::{GpuContext, GpuError};
 
 /// The score-accumulation pass.
 pub const SCORE_ACCUMULATE_WGSL: &str = include_str!("shaders/score_accumulate.wgsl");
@@ -56,8 +56,7 @@ pub struct ScoredImages {
 /// Running sums of the three radiance targets over the sub-frames of a scoring frame,
 /// allocated once per run (three `width × height` RGBA32F storage buffers).
 pub struct ScoreAccumulator {
-    pipeline: wgpu::ComputePipeline,
-    bind: wgpu::BindGroup,
+    pass: ComputePass,
     sums: [wgpu::Buffer; 3],
     size: (u32, u32),
     frames: u32,
@@ -66,29 +65,12 @@ pub struct ScoreAccumulator {
 impl ScoreAccumulator {
     /// Allocates the sums for the renderer's targets (zero-initialized).
     pub fn new(ctx: &GpuContext, renderer: &Renderer) -> Result<Self, GpuError> {
-        ctx.checked("score accumulator setup", || Self::build(ctx, renderer))
-    }
-
-    fn build(ctx: &GpuContext, renderer: &Renderer) -> Self {
         let device = &ctx.device;
         let targets = renderer.targets();
         let (w, h) = (
             targets.surface.texture.width(),
             targets.surface.texture.height(),
         );
-        let cs = wgpu::ShaderStages::COMPUTE;
-        let float = wgpu::TextureSampleType::Float { filterable: false };
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("score accumulate"),
-            entries: &[
-                texture_entry(0, cs, float, wgpu::TextureViewDimension::D2),
-                texture_entry(1, cs, float, wgpu::TextureViewDimension::D2),
-                texture_entry(2, cs, float, wgpu::TextureViewDimension::D2),
-                storage_entry(3, false, cs),
-                storage_entry(4, false, cs),
-                storage_entry(5, false, cs),
-            ],
-        });
         let sum = |label: &str| {
             device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
@@ -104,52 +86,31 @@ impl ScoreAccumulator {
             sum("score sum: surface"),
             sum("score sum: volume"),
         ];
-        let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("score accumulate"),
-            layout: &layout,
-            entries: &[
-                texture_binding(0, &targets.direct.view),
-                texture_binding(1, &targets.surface.view),
-                texture_binding(2, &targets.volume.view),
-                wgpu::BindGroupEntry {
-                    binding: 3,
-                    resource: sums[0].as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 4,
-                    resource: sums[1].as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 5,
-                    resource: sums[2].as_entire_binding(),
-                },
-            ],
-        });
-        let module = shader::module(
-            device,
+        let shader = Shader::new(
+            ctx,
             "score_accumulate.wgsl",
             SCORE_ACCUMULATE_WGSL.to_owned(),
-        );
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("score accumulate"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
-        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("score accumulate"),
-            layout: Some(&pipeline_layout),
-            module: &module,
-            entry_point: Some("accumulate"),
-            compilation_options: Default::default(),
-            cache: None,
-        });
-        Self {
-            pipeline,
-            bind,
+        )?;
+        let pass = ComputePass::builder(ctx, ACCUMULATE_PASS, &shader)
+            .bind(
+                0,
+                &[
+                    ("direct_in", &targets.direct.view),
+                    ("surface_in", &targets.surface.view),
+                    ("volume_in", &targets.volume.view),
+                    ("direct_sum", &sums[0]),
+                    ("surface_sum", &sums[1]),
+                    ("volume_sum", &sums[2]),
+                ],
+            )
+            .kernels(&["accumulate"])
+            .build()?;
+        Ok(Self {
+            pass,
             sums,
             size: (w, h),
             frames: 0,
-        }
+        })
     }
 
     /// Bytes of GPU memory the sums own.
@@ -161,10 +122,8 @@ impl ScoreAccumulator {
     /// frame's three targets into the sums.
     pub fn record(&mut self, frame: &mut Frame<'_>) -> Result<(), GpuError> {
         let (w, h) = self.size;
-        let mut pass = frame.compute_pass(ACCUMULATE_PASS)?;
-        pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, &self.bind, &[]);
-        pass.dispatch_workgroups(w.div_ceil(8), h.div_ceil(8), 1);
+        let mut pass = self.pass.begin(frame)?;
+        pass.dispatch("accumulate", [w.div_ceil(8), h.div_ceil(8), 1])?;
         drop(pass);
         self.frames += 1;
         Ok(())
@@ -213,7 +172,7 @@ mod tests {
 
     #[test]
     fn accumulate_shader_validates() -> Result<(), String> {
-        shader::validate_wgsl("score_accumulate.wgsl", SCORE_ACCUMULATE_WGSL)
+        crate::shader::validate_wgsl("score_accumulate.wgsl", SCORE_ACCUMULATE_WGSL)
     }
 
     #[test]

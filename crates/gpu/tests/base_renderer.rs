@@ -120,7 +120,10 @@ fn point_light_cube_gbuffer_sees_the_first_surface_along_each_texel_ray() {
     assert_eq!(shadow.depth.texture.depth_or_array_layers(), 6);
     // A light G-buffer as a method would make one: allocate it for the light's view
     // and record it into a frame.
-    let gb = renderer.gbuffer_pass().light_gbuffer(&ctx.device, view);
+    let gb = renderer
+        .gbuffer_pass()
+        .light_gbuffer(&ctx.device, view)
+        .expect("light gbuffer");
     let mut profiler = PassProfiler::new(&ctx, 1);
     let mut frame = renderer
         .begin_frame(&mut profiler, FrameMode::Timed)

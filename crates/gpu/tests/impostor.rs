@@ -1,13 +1,13 @@
 //! Distance impostors traced on the GPU against analytic intersections, on whatever
 //! adapter the machine has (lavapipe on CI; without one these fail with the install hint).
 
-use caustics_gpu::binding::{entry, impostor_entries};
 use caustics_gpu::impostor::IMPOSTOR_TRACE_WGSL;
+use caustics_gpu::pass::{ComputePass, Shader};
 use caustics_gpu::readback::read_buffer_bytes;
 use caustics_gpu::wgpu::{self, util::DeviceExt};
 use caustics_gpu::{
-    AdapterChoice, FrameMode, GpuContext, GpuScene, ImpostorPass, PassProfiler, Renderer,
-    RendererOptions, shader,
+    AdapterChoice, FrameMode, GpuContext, GpuScene, PassProfiler, Renderer, RendererOptions,
+    shader,
 };
 use caustics_scene::{Scene, Vec3};
 
@@ -60,7 +60,7 @@ fn trace_in(
         GpuContext::new(&AdapterChoice::from_flag_or_env(None)).unwrap_or_else(|e| panic!("{e}"));
     let gpu_scene = GpuScene::upload(&ctx, scene.into(), Default::default()).expect("upload");
     let renderer = Renderer::new(&ctx, gpu_scene, RendererOptions::default()).expect("renderer");
-    let pass = ImpostorPass::new(&ctx.device);
+    let pass = renderer.impostor_pass(&ctx).expect("impostor pass");
     let impostor = match center {
         Some(c) => pass.impostor_around(&ctx.device, renderer.scene(), objects, c, 256),
         None => pass.impostor(&ctx.device, renderer.scene(), objects, 256),
@@ -68,48 +68,12 @@ fn trace_in(
     .expect("impostor");
 
     let device = &ctx.device;
-    let vis = wgpu::ShaderStages::COMPUTE;
-    let [map_entry, ids_entry] = impostor_entries(0, vis);
-    let storage = |binding, read_only| {
-        entry(
-            binding,
-            vis,
-            wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Storage { read_only },
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-        )
-    };
-    let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-        label: Some("trace test"),
-        entries: &[
-            map_entry,
-            ids_entry,
-            storage(2, true),
-            storage(3, false),
-            caustics_gpu::binding::uniform_entry(4, vis),
-        ],
-    });
-    let module = shader::module(
-        device,
+    let shader = Shader::new(
+        &ctx,
         "trace test",
         shader::compose(&format!("{IMPOSTOR_TRACE_WGSL}\n{TRACE_TEST_WGSL}")),
-    );
-    let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-        label: Some("trace test"),
-        layout: Some(
-            &device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: None,
-                bind_group_layouts: &[Some(&layout)],
-                immediate_size: 0,
-            }),
-        ),
-        module: &module,
-        entry_point: Some("main"),
-        compilation_options: Default::default(),
-        cache: None,
-    });
+    )
+    .expect("trace test shader");
     let ray_data: Vec<[f32; 8]> = rays
         .iter()
         .map(|(o, d)| [o.x, o.y, o.z, 0.0, d.x, d.y, d.z, 0.0])
@@ -137,32 +101,20 @@ fn trace_in(
         contents: bytemuck::cast_slice(&params),
         usage: wgpu::BufferUsages::UNIFORM,
     });
-    let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("trace test"),
-        layout: &layout,
-        entries: &[
-            wgpu::BindGroupEntry {
-                binding: 0,
-                resource: wgpu::BindingResource::TextureView(&impostor.normal_distance.view),
-            },
-            wgpu::BindGroupEntry {
-                binding: 1,
-                resource: wgpu::BindingResource::TextureView(&impostor.object_ids.view),
-            },
-            wgpu::BindGroupEntry {
-                binding: 2,
-                resource: ray_buffer.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 3,
-                resource: hit_buffer.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 4,
-                resource: param_buffer.as_entire_binding(),
-            },
-        ],
-    });
+    let trace = ComputePass::builder(&ctx, "test/trace", &shader)
+        .bind(
+            0,
+            &[
+                ("map", &impostor.normal_distance.view),
+                ("ids", &impostor.object_ids.view),
+                ("rays", &ray_buffer),
+                ("hits", &hit_buffer),
+                ("params", &param_buffer),
+            ],
+        )
+        .kernels(&["main"])
+        .build()
+        .expect("trace pass");
     let mut profiler = PassProfiler::new(&ctx, 1);
     let mut frame = renderer
         .begin_frame(&mut profiler, FrameMode::Timed)
@@ -170,10 +122,9 @@ fn trace_in(
     pass.record(&mut frame, "test/impostor", renderer.scene(), &impostor)
         .expect("record");
     {
-        let mut cp = frame.compute_pass("test/trace").expect("compute pass");
-        cp.set_pipeline(&pipeline);
-        cp.set_bind_group(0, &bind, &[]);
-        cp.dispatch_workgroups((rays.len() as u32).div_ceil(64), 1, 1);
+        let mut cp = trace.begin(&mut frame).expect("compute pass");
+        cp.dispatch("main", [(rays.len() as u32).div_ceil(64), 1, 1])
+            .expect("dispatch");
     }
     frame.submit(&ctx).expect("submit");
     let bytes =

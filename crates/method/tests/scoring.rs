@@ -6,10 +6,11 @@
 
 use std::sync::Arc;
 
+use caustics_gpu::pass::{RasterPass, Shader};
 use caustics_gpu::textures::{additive_hdr_target, load_attachment};
 use caustics_gpu::{
     AdapterChoice, Frame, GpuContext, GpuScene, Renderer, RendererOptions, ScoreAccumulator,
-    pass_desc, shader, wgpu,
+    shader, wgpu,
 };
 use caustics_method::{CausticsMethod, Counters, MethodError, render_scoring_frame};
 use caustics_scene::Scene;
@@ -25,18 +26,14 @@ const FOV_Y_DEG: f32 = 40.0;
 const FOCUS_PX: [f32; 4] = [10.3, 7.45, 12.6, 7.8];
 
 struct Focus {
-    pipeline: wgpu::RenderPipeline,
-    bind: wgpu::BindGroup,
+    draw: RasterPass,
 }
 
 impl CausticsMethod for Focus {
     fn record(&mut self, frame: &mut Frame<'_>) -> Result<(), MethodError> {
         let renderer = frame.renderer;
         let attachments = [load_attachment(&renderer.targets().surface.view)];
-        let mut pass = frame.render_pass("focus/draw", pass_desc(&attachments))?;
-        pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, renderer.frame_bind_group(), &[]);
-        pass.set_bind_group(1, &self.bind, &[]);
+        let mut pass = self.draw.begin(frame, &attachments, None)?;
         pass.draw(0..6, 0..1);
         Ok(())
     }
@@ -70,42 +67,14 @@ fn focus_method(ctx: &GpuContext, renderer: &Renderer) -> Focus {
         contents: bytemuck::cast_slice(&uniforms),
         usage: wgpu::BufferUsages::UNIFORM,
     });
-    let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-        label: Some("focus"),
-        entries: &[caustics_gpu::binding::uniform_entry(
-            0,
-            wgpu::ShaderStages::VERTEX_FRAGMENT,
-        )],
-    });
-    let bind = caustics_gpu::binding::buffers_bind_group(device, "focus", &layout, &[&buffer]);
-    let module = shader::module(device, "focus.wgsl", shader::compose_method(FOCUS_WGSL));
-    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-        label: Some("focus"),
-        bind_group_layouts: &[Some(renderer.frame_layout()), Some(&layout)],
-        immediate_size: 0,
-    });
-    let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-        label: Some("focus"),
-        layout: Some(&pipeline_layout),
-        vertex: wgpu::VertexState {
-            module: &module,
-            entry_point: Some("vs_focus"),
-            compilation_options: Default::default(),
-            buffers: &[],
-        },
-        primitive: Default::default(),
-        depth_stencil: None,
-        multisample: Default::default(),
-        fragment: Some(wgpu::FragmentState {
-            module: &module,
-            entry_point: Some("fs_focus"),
-            compilation_options: Default::default(),
-            targets: &[Some(additive_hdr_target())],
-        }),
-        multiview_mask: None,
-        cache: None,
-    });
-    Focus { pipeline, bind }
+    let shader = Shader::new(ctx, "focus.wgsl", shader::compose_method(FOCUS_WGSL)).expect("shader");
+    let draw = RasterPass::builder(ctx, "focus/draw", &shader, "vs_focus")
+        .frame(renderer)
+        .bind(1, &[("focus", &buffer)])
+        .fragment("fs_focus", &[Some(additive_hdr_target())])
+        .build()
+        .expect("focus pass");
+    Focus { draw }
 }
 
 fn scene(dir: &std::path::Path) -> Scene {
