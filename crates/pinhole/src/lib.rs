@@ -57,9 +57,9 @@ use caustics_gpu::binding::entry;
 use caustics_gpu::textures::{additive_hdr_target, load_attachment};
 use caustics_gpu::wgpu::{self, util::DeviceExt};
 use caustics_gpu::{CountedPipeline, Frame, GpuContext, Renderer, pass_desc, shader};
+use caustics_method::params::{above, closed};
 use caustics_method::{
-    Capabilities, CausticsMethod, Counters, MethodError, MethodInfo, Unsupported, param_specs,
-    parse_params,
+    Capabilities, CausticsMethod, Counters, Method, MethodError, Unsupported, method_params,
 };
 use caustics_scene::{Light, Material, Scene, Shape, Vec3};
 use serde::{Deserialize, Serialize};
@@ -101,136 +101,86 @@ impl Filtering {
     }
 }
 
-/// Parameters of `pinhole` (defaults: the paper's choices).
-#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
-#[serde(default, deny_unknown_fields)]
-pub struct PinholeParams {
-    /// Sampling strategy of the reflector (§3.2).
-    pub sampling: Strategy,
-    /// Number of point samples (the paper sweeps 100, 1000, 10000).
-    pub samples: u32,
-    /// Seed of the sample generator.
-    pub seed: u64,
-    /// Anisotropic filtering of the projected light (§3.3).
-    pub filtering: Filtering,
-    /// Angular radius (rad) of the light in the cube map as seen from the generator's
-    /// centre; the paper's point light covers 0.0008 sr, i.e. 0.016 rad.
-    pub light_angle: f64,
-    /// Light map (cube face) size in texels (power of two); the paper uses 256.
-    pub cube_size: u32,
-    /// ε = epsilon_scale · A_s is added to d² (the paper: the sample region's diameter squared).
-    pub epsilon_scale: f64,
-    /// Samples per gather instance (the paper's samples per pass).
-    pub samples_per_pass: u32,
-}
+caustics_method::param_enum!(
+    Strategy,
+    [
+        Strategy::Random,
+        Strategy::Grid,
+        Strategy::Quantized,
+        Strategy::NeighborRemoval
+    ]
+);
+caustics_method::param_enum!(
+    Filtering,
+    [Filtering::Off, Filtering::Curvature, Filtering::Full]
+);
 
-impl Default for PinholeParams {
-    fn default() -> Self {
-        Self {
-            sampling: Strategy::NeighborRemoval,
-            samples: 1000,
-            seed: 1,
-            filtering: Filtering::Full,
-            light_angle: 0.016,
-            cube_size: 256,
-            epsilon_scale: 1.0,
-            samples_per_pass: 64,
-        }
+method_params! {
+    /// Parameters of `pinhole` (defaults: the paper's choices).
+    pub struct PinholeParams {
+        /// random | grid | quantized | neighbor_removal (the paper's §3.2)
+        sampling: Strategy = Strategy::NeighborRemoval;
+        /// number of point samples on the generator (paper: 100, 1000, 10000; at most
+        /// 100000: every receiver pixel loops over all of them, and the CPU sampler
+        /// draws 8 candidates per sample)
+        samples: u32 = 1000 => closed(1.0, 100_000.0);
+        /// seed of the sample generator
+        seed: u32 = 1 => closed(0.0, u32::MAX as f64);
+        /// off | curvature | full: textureSampleGrad footprint of each sample's patch (§3.3)
+        filtering: Filtering = Filtering::Full;
+        /// angular radius (rad) of the light in the cube map, seen from the generator's
+        /// centre (paper: 0.016; at most 0.5 rad, beyond which the light is no longer
+        /// small and its map's cone leaves the one face it is stored on)
+        light_angle: f64 = 0.016 => above(0.0, 0.5);
+        /// cube map face size in texels (power of two, 8 to 2048: a 2048² R16F map with
+        /// mips is 11 MB)
+        cube_size: u32 = 256 => closed(8.0, 2048.0);
+        /// eps = epsilon_scale x A_s is added to d^2 (paper: 1, the sample diameter
+        /// squared; 0 would leave the 1/d² singularity unguarded, and beyond 100 the
+        /// guard outweighs d² over the whole near field)
+        epsilon_scale: f64 = 1.0 => above(0.0, 100.0);
+        /// samples per gather instance (additive passes; 1 to 4096)
+        samples_per_pass: u32 = 64 => closed(1.0, 4096.0);
     }
+    check = |p: &PinholeParams| {
+        if p.cube_size.is_power_of_two() {
+            Ok(())
+        } else {
+            Err(format!(
+                "cube_size: expected a power of two in [8, 2048], got {}",
+                p.cube_size
+            ))
+        }
+    };
 }
 
-impl PinholeParams {
-    /// Range checks, with errors naming the parameter and what was expected.
-    pub fn validate(&self) -> Result<(), MethodError> {
-        let err = |message: String| {
-            Err(MethodError::Param {
-                method: NAME,
-                message,
-            })
-        };
-        if !(1..=100_000).contains(&self.samples) {
-            return err(format!(
-                "samples: expected an integer in 1..=100000, got {}",
-                self.samples
-            ));
-        }
-        if !(self.light_angle.is_finite() && self.light_angle > 0.0 && self.light_angle <= 0.5) {
-            return err(format!(
-                "light_angle: expected an angle in (0, 0.5] radians, got {}",
-                self.light_angle
-            ));
-        }
-        if !(self.cube_size.is_power_of_two() && (8..=2048).contains(&self.cube_size)) {
-            return err(format!(
-                "cube_size: expected a power of two in 8..=2048, got {}",
-                self.cube_size
-            ));
-        }
-        if !(self.epsilon_scale.is_finite() && self.epsilon_scale >= 0.0) {
-            return err(format!(
-                "epsilon_scale: expected a number >= 0, got {}",
-                self.epsilon_scale
-            ));
-        }
-        if !(1..=4096).contains(&self.samples_per_pass) {
-            return err(format!(
-                "samples_per_pass: expected an integer in 1..=4096, got {}",
-                self.samples_per_pass
-            ));
-        }
-        Ok(())
+impl Method for Pinhole {
+    type Params = PinholeParams;
+    const NAME: &'static str = NAME;
+    const SUMMARY: &'static str = "reflector point samples as pinhole cameras projecting the light's cube map, 4 sampling strategies, curvature-based anisotropic filtering";
+    const SOURCE: &'static str =
+        "Wand & Straßer 2003, Real-Time Caustics (wand-strasser-2003-real-time-caustics.txt)";
+    const CAPABILITIES: Capabilities = Capabilities {
+        surface: true,
+        volume: false,
+        reflection: true,
+        refraction: true,
+        multiple_bounces: false,
+        directional_light: true,
+        point_light: true,
+        spot_light: true,
+    };
+
+    fn check_scene(scene: &Scene, _params: &PinholeParams) -> Result<(), Unsupported> {
+        check_scene(scene)
     }
-}
 
-/// The registry entry.
-pub fn info() -> MethodInfo {
-    MethodInfo {
-        name: NAME,
-        summary: "reflector point samples as pinhole cameras projecting the light's cube map, 4 sampling strategies, curvature-based anisotropic filtering",
-        source: "Wand & Straßer 2003, Real-Time Caustics (wand-strasser-2003-real-time-caustics.txt)",
-        capabilities: Capabilities {
-            surface: true,
-            volume: false,
-            reflection: true,
-            refraction: true,
-            multiple_bounces: false,
-            directional_light: true,
-            point_light: true,
-            spot_light: true,
-        },
-        params: || {
-            param_specs::<PinholeParams>(&[
-                (
-                    "sampling",
-                    "random | grid | quantized | neighbor_removal (the paper's §3.2)",
-                ),
-                (
-                    "samples",
-                    "number of point samples on the generator (paper: 100, 1000, 10000)",
-                ),
-                ("seed", "seed of the sample generator"),
-                (
-                    "filtering",
-                    "off | curvature | full: textureSampleGrad footprint of each sample's patch (§3.3)",
-                ),
-                (
-                    "light_angle",
-                    "angular radius (rad) of the light in the cube map, seen from the generator's centre",
-                ),
-                ("cube_size", "cube map face size in texels (power of two)"),
-                (
-                    "epsilon_scale",
-                    "eps = epsilon_scale x A_s is added to d^2 (paper: sample diameter squared)",
-                ),
-                (
-                    "samples_per_pass",
-                    "samples per gather instance (additive passes)",
-                ),
-            ])
-        },
-        validate_params: |v| parse_params::<PinholeParams>(NAME, v)?.validate(),
-        check_scene,
-        create,
+    fn create(
+        ctx: &GpuContext,
+        renderer: &Renderer,
+        params: &PinholeParams,
+    ) -> Result<Box<dyn CausticsMethod>, MethodError> {
+        Ok(Box::new(Pinhole::new(ctx, renderer, params)?))
     }
 }
 
@@ -274,7 +224,7 @@ pub fn caustic_generator(scene: &Scene) -> Result<usize, Unsupported> {
     generator.ok_or_else(|| Unsupported("the scene has no specular object".into()))
 }
 
-fn check_scene(scene: &Scene, _params: &serde_json::Value) -> Result<(), Unsupported> {
+fn check_scene(scene: &Scene) -> Result<(), Unsupported> {
     let g = caustic_generator(scene)?;
     if let Light::Point { position, .. } | Light::Spot { position, .. } = scene.lights[0] {
         let centre = scene.objects[g].shape.bounds().center();
@@ -376,16 +326,6 @@ pub struct Pinhole {
     bytes: u64,
 }
 
-fn create(
-    ctx: &GpuContext,
-    renderer: &Renderer,
-    params: &serde_json::Value,
-) -> Result<Box<dyn CausticsMethod>, MethodError> {
-    let p: PinholeParams = parse_params(NAME, params)?;
-    p.validate()?;
-    Ok(Box::new(Pinhole::new(ctx, renderer, &p)?))
-}
-
 /// The GPU form of the samples, with ε and the finite-difference step filled in.
 fn gpu_samples(samples: &[PointSample], epsilon_scale: f32) -> Vec<GpuSample> {
     samples
@@ -425,11 +365,15 @@ impl Pinhole {
             reason,
         };
         let generator = caustic_generator(scene).map_err(unsupported)?;
-        check_scene(scene, &serde_json::Value::Null).map_err(unsupported)?;
+        check_scene(scene).map_err(unsupported)?;
         let shape = &scene.objects[generator].shape;
-        let samples =
-            sampling::generate(shape, params.sampling, params.samples as usize, params.seed)
-                .map_err(|e| unsupported(Unsupported(e.to_string())))?;
+        let samples = sampling::generate(
+            shape,
+            params.sampling,
+            params.samples as usize,
+            params.seed as u64,
+        )
+        .map_err(|e| unsupported(Unsupported(e.to_string())))?;
         let disc = LightDisc::new(
             &scene.lights[0],
             shape.bounds().center(),
@@ -761,6 +705,7 @@ impl CausticsMethod for Pinhole {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use caustics_method::params::parse;
 
     #[test]
     fn shaders_validate() -> Result<(), String> {
@@ -769,36 +714,71 @@ mod tests {
     }
 
     #[test]
-    fn bad_params_are_errors() {
+    fn bad_params_are_errors_naming_the_parameter() {
         for (json, needle) in [
             (serde_json::json!({"samples": 0}), "samples"),
             (serde_json::json!({"samples": 1_000_000}), "samples"),
             (
                 serde_json::json!({"sampling": "poisson"}),
-                "unknown variant",
+                "sampling: expected one of",
             ),
-            (serde_json::json!({"filtering": "yes"}), "unknown variant"),
+            (
+                serde_json::json!({"filtering": "yes"}),
+                "filtering: expected one of",
+            ),
             (serde_json::json!({"light_angle": 0.0}), "light_angle"),
+            (serde_json::json!({"light_angle": 1e308}), "light_angle"),
             (serde_json::json!({"cube_size": 300}), "cube_size"),
+            (serde_json::json!({"cube_size": 4096}), "cube_size"),
             (serde_json::json!({"epsilon_scale": -1.0}), "epsilon_scale"),
+            (serde_json::json!({"epsilon_scale": 0.0}), "epsilon_scale"),
+            (serde_json::json!({"epsilon_scale": 1e9}), "epsilon_scale"),
+            (serde_json::json!({"seed": -1}), "seed"),
+            (serde_json::json!({"seed": 1.5}), "seed"),
             (
                 serde_json::json!({"samples_per_pass": 0}),
                 "samples_per_pass",
             ),
+            (
+                serde_json::json!({"samples_per_pass": 5000}),
+                "samples_per_pass",
+            ),
             (serde_json::json!({"sample": 10}), "known parameters"),
         ] {
-            let e =
-                parse_params::<PinholeParams>(NAME, &json).and_then(|p| p.validate().map(|_| p));
-            let msg = e.expect_err("must fail").to_string();
-            assert!(msg.contains(needle), "{json}: {msg}");
+            let msg = parse::<PinholeParams>(NAME, &json)
+                .expect_err("must fail")
+                .to_string();
+            assert!(msg.contains(needle) && msg.contains(NAME), "{json}: {msg}");
         }
-        let ok = parse_params::<PinholeParams>(
+        let ok = parse::<PinholeParams>(
             NAME,
             &serde_json::json!({"sampling": "quantized", "samples": 100, "filtering": "off"}),
         )
         .expect("valid");
         assert_eq!(ok.sampling, Strategy::Quantized);
         assert_eq!(ok.filtering, Filtering::Off);
+        assert_eq!(
+            parse::<PinholeParams>(NAME, &serde_json::Value::Null).expect("defaults"),
+            PinholeParams::default()
+        );
+    }
+
+    #[test]
+    fn defaults_keep_their_json_form() {
+        use caustics_method::MethodParams;
+        assert_eq!(
+            serde_json::Value::Object(PinholeParams::default().to_json()),
+            serde_json::json!({
+                "sampling": "neighbor_removal",
+                "samples": 1000,
+                "seed": 1,
+                "filtering": "full",
+                "light_angle": 0.016,
+                "cube_size": 256,
+                "epsilon_scale": 1.0,
+                "samples_per_pass": 64
+            })
+        );
     }
 
     #[test]

@@ -28,12 +28,11 @@ use caustics_gpu::binding::{buffers_bind_group, storage_entry, uniform_entry};
 use caustics_gpu::textures::{additive_hdr_target, load_attachment};
 use caustics_gpu::wgpu::{self, util::DeviceExt};
 use caustics_gpu::{CountedPipeline, Frame, GpuContext, Renderer, pass_desc, shader};
+use caustics_method::params::{above, closed};
 use caustics_method::{
-    Capabilities, CausticsMethod, Counters, MethodError, MethodInfo, Unsupported, param_specs,
-    parse_params,
+    Capabilities, CausticsMethod, Counters, Method, MethodError, Unsupported, method_params,
 };
 use caustics_scene::{Material, Scene, Shape};
-use serde::{Deserialize, Serialize};
 
 pub use sources::{Source, WavefrontMesh};
 
@@ -51,83 +50,45 @@ fn pass_source(pass: &str) -> String {
 /// Registry name.
 pub const NAME: &str = "wavefront";
 
-/// Parameters of `wavefront`.
-#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
-#[serde(default, deny_unknown_fields)]
-pub struct WavefrontParams {
-    /// Rays per side of the light-ray lattice over an analytic generator (sphere,
-    /// quad, cylinder).
-    /// Heightfields use their own vertex grid, as Wallace does.
-    pub grid: u32,
-    /// A caustic fragment counts only where the camera G-buffer's surface is within
-    /// `tolerance` × (distance to the eye) of the triangle's receiver point.
-    pub tolerance: f64,
-}
-
-impl Default for WavefrontParams {
-    fn default() -> Self {
-        Self {
-            grid: 512,
-            tolerance: 2e-3,
-        }
+method_params! {
+    /// Parameters of `wavefront`.
+    pub struct WavefrontParams {
+        /// rays per side of the light-ray lattice over an analytic generator (heightfields
+        /// use their vertex grid); 2 to 1024: a 1024² lattice is 1M rays and 2M triangles
+        grid: u32 = 512 => closed(2.0, 1024.0);
+        /// receiver match: max |G-buffer position - triangle point| / distance to eye
+        /// (at most 0.5: a looser match accepts light on whatever surface is in front)
+        tolerance: f64 = 2e-3 => above(0.0, 0.5);
     }
 }
 
-impl WavefrontParams {
-    fn validate(&self) -> Result<(), MethodError> {
-        let err = |message: String| {
-            Err(MethodError::Param {
-                method: NAME,
-                message,
-            })
-        };
-        if !(2..=1024).contains(&self.grid) {
-            return err(format!(
-                "grid: expected an integer in 2..=1024, got {}",
-                self.grid
-            ));
-        }
-        if !(self.tolerance.is_finite() && self.tolerance > 0.0 && self.tolerance < 1.0) {
-            return err(format!(
-                "tolerance: expected a number in (0, 1), got {}",
-                self.tolerance
-            ));
-        }
-        Ok(())
-    }
-}
+impl Method for Wavefront {
+    type Params = WavefrontParams;
+    const NAME: &'static str = NAME;
+    const SUMMARY: &'static str = "refracted or reflected wavefront mesh, brightness = area ratio from screen-space derivatives";
+    const SOURCE: &'static str =
+        "Wallace 2016, Rendering Realtime Caustics in WebGL (wallace-2016-webgl-caustics.txt)";
+    const CAPABILITIES: Capabilities = Capabilities {
+        surface: true,
+        volume: false,
+        reflection: true,
+        refraction: true,
+        multiple_bounces: false,
+        directional_light: true,
+        point_light: true,
+        spot_light: true,
+    };
 
-/// The registry entry.
-pub fn info() -> MethodInfo {
-    MethodInfo {
-        name: NAME,
-        summary: "refracted or reflected wavefront mesh, brightness = area ratio from screen-space derivatives",
-        source: "Wallace 2016, Rendering Realtime Caustics in WebGL (wallace-2016-webgl-caustics.txt)",
-        capabilities: Capabilities {
-            surface: true,
-            volume: false,
-            reflection: true,
-            refraction: true,
-            multiple_bounces: false,
-            directional_light: true,
-            point_light: true,
-            spot_light: true,
-        },
-        params: || {
-            param_specs::<WavefrontParams>(&[
-                (
-                    "grid",
-                    "rays per side of the light-ray lattice over an analytic generator (heightfields use their vertex grid)",
-                ),
-                (
-                    "tolerance",
-                    "receiver match: max |G-buffer position - triangle point| / distance to eye",
-                ),
-            ])
-        },
-        validate_params: |v| parse_params::<WavefrontParams>(NAME, v)?.validate(),
-        check_scene,
-        create,
+    fn check_scene(scene: &Scene, _params: &WavefrontParams) -> Result<(), Unsupported> {
+        check_scene(scene)
+    }
+
+    fn create(
+        ctx: &GpuContext,
+        renderer: &Renderer,
+        params: &WavefrontParams,
+    ) -> Result<Box<dyn CausticsMethod>, MethodError> {
+        Ok(Box::new(Wavefront::new(ctx, renderer, params)?))
     }
 }
 
@@ -201,7 +162,7 @@ fn shape_name(s: &Shape) -> &'static str {
     }
 }
 
-fn check_scene(scene: &Scene, _params: &serde_json::Value) -> Result<(), Unsupported> {
+fn check_scene(scene: &Scene) -> Result<(), Unsupported> {
     let g = caustic_generator(scene)?;
     let shape = &scene.objects[g].shape;
     if !matches!(shape, Shape::Heightfield(_)) {
@@ -247,16 +208,6 @@ pub struct Wavefront {
     source_count: u32,
     triangle_count: u32,
     bytes: u64,
-}
-
-fn create(
-    ctx: &GpuContext,
-    renderer: &Renderer,
-    params: &serde_json::Value,
-) -> Result<Box<dyn CausticsMethod>, MethodError> {
-    let p: WavefrontParams = parse_params(NAME, params)?;
-    p.validate()?;
-    Ok(Box::new(Wavefront::new(ctx, renderer, &p)?))
 }
 
 impl Wavefront {
@@ -560,6 +511,7 @@ impl CausticsMethod for Wavefront {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use caustics_method::params::parse;
 
     #[test]
     fn shaders_validate() -> Result<(), String> {
@@ -569,17 +521,25 @@ mod tests {
     }
 
     #[test]
-    fn bad_params_are_errors() {
+    fn bad_params_are_errors_naming_the_parameter() {
         for (json, needle) in [
             (serde_json::json!({"grid": 1}), "grid"),
             (serde_json::json!({"grid": 5000}), "grid"),
+            (serde_json::json!({"grid": 2.5}), "grid"),
             (serde_json::json!({"tolerance": 0.0}), "tolerance"),
+            (serde_json::json!({"tolerance": -1.0}), "tolerance"),
+            (serde_json::json!({"tolerance": 1e308}), "tolerance"),
             (serde_json::json!({"grd": 4}), "known parameters"),
         ] {
-            let e =
-                parse_params::<WavefrontParams>(NAME, &json).and_then(|p| p.validate().map(|_| p));
-            let msg = e.expect_err("must fail").to_string();
-            assert!(msg.contains(needle), "{msg}");
+            let msg = parse::<WavefrontParams>(NAME, &json)
+                .expect_err("must fail")
+                .to_string();
+            assert!(msg.contains(needle) && msg.contains(NAME), "{msg}");
         }
+        use caustics_method::MethodParams;
+        assert_eq!(
+            serde_json::Value::Object(WavefrontParams::default().to_json()),
+            serde_json::json!({"grid": 512, "tolerance": 2e-3})
+        );
     }
 }
