@@ -4,15 +4,16 @@
 //! six perspective faces (a cube) for a point light.
 
 use bytemuck::{Pod, Zeroable};
-use caustics_scene::{Aabb, Camera, Light, Mat4, Vec3};
+use caustics_scene::Camera;
 use wgpu::util::DeviceExt;
 
 use crate::frame::Frame;
+pub use crate::light_view::{LightFace, LightProjection, LightView};
 use crate::pass::{BindGroupSchema, RasterPass, Shader};
-use crate::{GpuContext, GpuError};
 use crate::scene_upload::{GpuScene, SceneVertex};
 use crate::shader;
 use crate::textures::{DEPTH_FORMAT, IDS_FORMAT, NORMAL_FORMAT, POSITION_FORMAT, Target};
+use crate::{GpuContext, GpuError};
 
 /// Uniforms of one rasterized view (matches `View` in gbuffer.wgsl).
 #[repr(C)]
@@ -22,211 +23,6 @@ pub struct ViewUniform {
     pub view_proj: [[f32; 4]; 4],
     /// Eye position (perspective) or the view's centre (orthographic).
     pub eye: [f32; 4],
-}
-
-/// How a light G-buffer projects.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum LightProjection {
-    /// Directional light: one orthographic face.
-    Orthographic,
-    /// Spot light: one perspective face covering the cone.
-    Perspective,
-    /// Point light: six 90° perspective faces, order +X, −X, +Y, −Y, +Z, −Z.
-    Cube,
-}
-
-/// One face of a light's view.
-#[derive(Clone, Copy, Debug)]
-pub struct LightFace {
-    /// World to view.
-    pub view: Mat4,
-    /// View to clip (depth 0..1).
-    pub proj: Mat4,
-    /// World to clip.
-    pub view_proj: Mat4,
-}
-
-/// A light's view: faces, resolution and texel footprint.
-#[derive(Clone, Debug)]
-pub struct LightView {
-    /// Projection kind.
-    pub projection: LightProjection,
-    /// 1 or 6 faces.
-    pub faces: Vec<LightFace>,
-    /// Square resolution of each face (texels).
-    pub resolution: u32,
-    /// World size of a texel: in metres for orthographic views, per metre of distance
-    /// from the light for perspective ones.
-    pub texel_size: f32,
-    /// Light position (point/spot) or the centre of the fitted volume (directional).
-    pub origin: Vec3,
-}
-
-fn any_up(dir: Vec3) -> Vec3 {
-    if dir.y.abs() < 0.99 { Vec3::Y } else { Vec3::Z }
-}
-
-impl LightView {
-    /// Fits the light's view around `bounds` (e.g. the whole scene for shadows, or
-    /// only the specular objects for photon generation).
-    pub fn fit(light: &Light, bounds: &Aabb, resolution: u32) -> Self {
-        let center = bounds.center();
-        let radius = bounds.bounding_sphere_radius().max(1e-3);
-        let far_from = |p: Vec3| {
-            let far = bounds
-                .corners()
-                .iter()
-                .map(|c| (*c - p).length())
-                .fold(0.0, f32::max);
-            far * 1.01 + 1e-3
-        };
-        match *light {
-            Light::Directional { direction, .. } => {
-                let eye = center - direction * (2.0 * radius);
-                let view = Mat4::look_at_rh(eye, center, any_up(direction));
-                let proj =
-                    Mat4::orthographic_rh(-radius, radius, -radius, radius, 0.0, 4.0 * radius);
-                Self {
-                    projection: LightProjection::Orthographic,
-                    faces: vec![LightFace {
-                        view,
-                        proj,
-                        view_proj: proj * view,
-                    }],
-                    resolution,
-                    texel_size: 2.0 * radius / resolution as f32,
-                    origin: center,
-                }
-            }
-            Light::Spot {
-                position,
-                direction,
-                cone_deg,
-                ..
-            } => {
-                let fov = (2.0 * cone_deg).clamp(1.0, 170.0).to_radians();
-                let far = far_from(position);
-                let near = (far * 1e-4).max(1e-4);
-                let view = Mat4::look_at_rh(position, position + direction, any_up(direction));
-                let proj = Mat4::perspective_rh(fov, 1.0, near, far);
-                Self {
-                    projection: LightProjection::Perspective,
-                    faces: vec![LightFace {
-                        view,
-                        proj,
-                        view_proj: proj * view,
-                    }],
-                    resolution,
-                    texel_size: 2.0 * (fov * 0.5).tan() / resolution as f32,
-                    origin: position,
-                }
-            }
-            Light::Point { position, .. } => {
-                let far = far_from(position);
-                let near = (far * 1e-4).max(1e-4);
-                let proj = Mat4::perspective_rh(std::f32::consts::FRAC_PI_2, 1.0, near, far);
-                let dirs = [Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z];
-                let faces = dirs
-                    .iter()
-                    .map(|&d| {
-                        let view = Mat4::look_at_rh(position, position + d, any_up(d));
-                        LightFace {
-                            view,
-                            proj,
-                            view_proj: proj * view,
-                        }
-                    })
-                    .collect();
-                Self {
-                    projection: LightProjection::Cube,
-                    faces,
-                    resolution,
-                    texel_size: 2.0 / resolution as f32,
-                    origin: position,
-                }
-            }
-        }
-    }
-}
-
-impl LightView {
-    /// One face of the light that just covers `points` (e.g. the vertices of the
-    /// caustic generators): an orthographic square around their projection for a
-    /// directional light, a perspective square cone towards them for a point or spot
-    /// light (a point light is treated as a spot aimed at them, so the specular objects
-    /// get the whole resolution instead of a sixth of a cube). None when `points` is
-    /// empty or a positional light sits among them (no cone can hold them).
-    pub fn fit_points(light: &Light, points: &[Vec3], resolution: u32) -> Option<Self> {
-        points.first()?;
-        match *light {
-            Light::Directional { direction, .. } => {
-                let dir = direction.normalize();
-                let up = any_up(dir);
-                let right = dir.cross(up).normalize();
-                let up = right.cross(dir);
-                let (mut lo, mut hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
-                for p in points {
-                    let q = Vec3::new(p.dot(right), p.dot(up), p.dot(dir));
-                    lo = lo.min(q);
-                    hi = hi.max(q);
-                }
-                // No margin: grid corners on the border of the view land on the generators' edges.
-                let half = 0.5 * (hi.x - lo.x).max(hi.y - lo.y) * (1.0 + 1e-5) + 1e-6;
-                let mid = 0.5 * (lo + hi);
-                let depth = (hi.z - lo.z).max(1e-3);
-                // The eye sits one depth before the nearest point, on the centre line.
-                let eye = right * mid.x + up * mid.y + dir * (lo.z - depth);
-                let view = Mat4::look_at_rh(eye, eye + dir, up);
-                let proj = Mat4::orthographic_rh(-half, half, -half, half, 0.0, 3.0 * depth);
-                Some(Self {
-                    projection: LightProjection::Orthographic,
-                    faces: vec![LightFace {
-                        view,
-                        proj,
-                        view_proj: proj * view,
-                    }],
-                    resolution,
-                    texel_size: 2.0 * half / resolution as f32,
-                    origin: eye + dir * depth,
-                })
-            }
-            Light::Point { position, .. } | Light::Spot { position, .. } => {
-                let centroid = points.iter().fold(Vec3::ZERO, |a, p| a + *p) / points.len() as f32;
-                let axis = (centroid - position).try_normalize()?;
-                let up = any_up(axis);
-                let right = axis.cross(up).normalize();
-                let up = right.cross(axis);
-                let (mut tan_max, mut near, mut far) = (0.0f32, f32::MAX, 0.0f32);
-                for p in points {
-                    let v = *p - position;
-                    let z = v.dot(axis);
-                    if z <= 1e-4 * v.length().max(1e-6) {
-                        return None;
-                    }
-                    tan_max = tan_max.max(v.dot(right).abs() / z).max(v.dot(up).abs() / z);
-                    near = near.min(z);
-                    far = far.max(v.length());
-                }
-                let fov = 2.0 * (tan_max * (1.0 + 1e-5) + 1e-6).atan();
-                if fov >= std::f32::consts::PI * 0.95 {
-                    return None;
-                }
-                let view = Mat4::look_at_rh(position, position + axis, up);
-                let proj = Mat4::perspective_rh(fov, 1.0, (near * 0.5).max(1e-4), far * 1.01);
-                Some(Self {
-                    projection: LightProjection::Perspective,
-                    faces: vec![LightFace {
-                        view,
-                        proj,
-                        view_proj: proj * view,
-                    }],
-                    resolution,
-                    texel_size: 2.0 * (fov * 0.5).tan() / resolution as f32,
-                    origin: position,
-                })
-            }
-        }
-    }
 }
 
 /// The targets of a G-buffer (one layer per view face).

@@ -11,15 +11,15 @@
 //! the pinhole crate).
 
 use bytemuck::{Pod, Zeroable};
-use caustics_scene::{Aabb, Mat4, Vec3, Vec4};
+use caustics_scene::{Aabb, Vec3};
 use wgpu::util::DeviceExt;
 
 use crate::frame::Frame;
 use crate::pass::{RasterPass, Shader};
-use crate::{GpuContext, GpuError};
 use crate::scene_upload::{GpuScene, SceneVertex};
 use crate::shader;
 use crate::textures::{DEPTH_FORMAT, Target};
+use crate::{GpuContext, GpuError};
 
 /// Render pass of an impostor (vertex + fragment), composed with `common.wgsl`.
 pub const IMPOSTOR_RENDER_WGSL: &str = include_str!("shaders/impostor_render.wgsl");
@@ -39,32 +39,9 @@ struct ImpostorView {
     center: [f32; 4],
 }
 
-/// Right, up and forward axes of the six faces, chosen so that the projection puts a
-/// direction where `impostor_face_uv` looks for it (Vulkan's cube-map convention:
-/// u = (sc/|ma| + 1)/2, v = (tc/|ma| + 1)/2 with row 0 at the top, so up = −t axis).
-const FACE_AXES: [(Vec3, Vec3, Vec3); 6] = [
-    (Vec3::NEG_Z, Vec3::Y, Vec3::X),
-    (Vec3::Z, Vec3::Y, Vec3::NEG_X),
-    (Vec3::X, Vec3::NEG_Z, Vec3::Y),
-    (Vec3::X, Vec3::Z, Vec3::NEG_Y),
-    (Vec3::X, Vec3::Y, Vec3::Z),
-    (Vec3::NEG_X, Vec3::Y, Vec3::NEG_Z),
-];
-
-/// World-to-clip matrix of face `face` (0..6) of a cube around `center`.
-pub fn face_view_proj(face: usize, center: Vec3, near: f32, far: f32) -> Mat4 {
-    let (right, up, forward) = FACE_AXES[face];
-    // Rows right, up, −forward: a camera looking down −z at `forward`.
-    let rotation = Mat4::from_cols(
-        right.extend(0.0),
-        up.extend(0.0),
-        (-forward).extend(0.0),
-        Vec4::W,
-    )
-    .transpose();
-    let view = rotation * Mat4::from_translation(-center);
-    Mat4::perspective_rh(std::f32::consts::FRAC_PI_2, 1.0, near, far) * view
-}
+/// World-to-clip matrix of face `face` (0..6) of a cube around `center`, in the one
+/// cube-face convention of [`crate::light_view::CUBE_FACES`].
+pub use crate::light_view::cube_face_view_proj as face_view_proj;
 
 /// One distance impostor: its textures, centre and reach.
 pub struct DistanceImpostor {
@@ -440,7 +417,10 @@ mod tests {
 
     #[test]
     fn impostor_view_matches_its_wgsl() {
-        crate::assert_wgsl_layout!(shader::compose(IMPOSTOR_RENDER_WGSL), ImpostorView { view_proj, center });
+        crate::assert_wgsl_layout!(
+            shader::compose(IMPOSTOR_RENDER_WGSL),
+            ImpostorView { view_proj, center }
+        );
     }
 
     #[test]

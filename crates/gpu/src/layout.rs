@@ -212,7 +212,10 @@ mod tests {
             ],
         )
         .expect_err("a reordered field must fail");
-        assert!(e.contains("field 1: Rust dir at byte 16, WGSL flux at byte 12"), "{e}");
+        assert!(
+            e.contains("field 1: Rust dir at byte 16, WGSL flux at byte 12"),
+            "{e}"
+        );
         let _ = Reordered {
             origin: [0.0; 3],
             _a: 0.0,

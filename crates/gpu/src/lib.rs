@@ -28,6 +28,7 @@ pub mod frame;
 pub mod gbuffer;
 pub mod impostor;
 pub mod layout;
+pub mod light_view;
 pub mod pass;
 pub mod profiling;
 pub mod readback;
@@ -42,8 +43,9 @@ pub use context::{
 };
 pub use error::GpuError;
 pub use frame::{Frame, ProfiledComputePass, ProfiledRenderPass};
-pub use gbuffer::{GBuffer, GBufferPass, LightProjection, LightView, ShadowMap};
+pub use gbuffer::{GBuffer, GBufferPass, ShadowMap};
 pub use impostor::{DistanceImpostor, ImpostorAtlas, ImpostorPass};
+pub use light_view::{LightFace, LightProjection, LightView};
 pub use profiling::{FrameMode, FrameSample, PassProfiler, PassSample, PassStatistics};
 pub use renderer::{CountedPipeline, Renderer, RendererOptions, fill_constants, pass_desc};
 pub use scene_upload::GpuScene;

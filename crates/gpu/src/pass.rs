@@ -180,13 +180,11 @@ fn reflect(
                 min_binding_size: None,
             },
             AddressSpace::Handle => match inner {
-                TypeInner::Sampler { comparison } => {
-                    wgpu::BindingType::Sampler(if *comparison {
-                        wgpu::SamplerBindingType::Comparison
-                    } else {
-                        wgpu::SamplerBindingType::Filtering
-                    })
-                }
+                TypeInner::Sampler { comparison } => wgpu::BindingType::Sampler(if *comparison {
+                    wgpu::SamplerBindingType::Comparison
+                } else {
+                    wgpu::SamplerBindingType::Filtering
+                }),
                 TypeInner::Image {
                     dim,
                     arrayed,
@@ -235,7 +233,9 @@ fn reflect(
                                     wgpu::StorageTextureAccess::ReadOnly
                                 },
                                 format: storage_format(*format).ok_or_else(|| {
-                                    format!("{label}: {name}: unsupported storage format {format:?}")
+                                    format!(
+                                        "{label}: {name}: unsupported storage format {format:?}"
+                                    )
                                 })?,
                                 view_dimension,
                             }
@@ -257,12 +257,15 @@ fn reflect(
                 visibility |= stage(ep.stage);
             }
         }
-        out.groups.entry(rb.group).or_default().push(ReflectedBinding {
-            name,
-            binding: rb.binding,
-            ty,
-            visibility,
-        });
+        out.groups
+            .entry(rb.group)
+            .or_default()
+            .push(ReflectedBinding {
+                name,
+                binding: rb.binding,
+                ty,
+                visibility,
+            });
     }
     for bindings in out.groups.values_mut() {
         bindings.sort_by_key(|b| b.binding);
@@ -652,9 +655,7 @@ impl ComputePass {
             .iter()
             .find(|(n, _)| n == name)
             .map(|(_, p)| p)
-            .ok_or_else(|| {
-                GpuError::Invalid(format!("pass {}: no kernel {name:?}", self.name))
-            })
+            .ok_or_else(|| GpuError::Invalid(format!("pass {}: no kernel {name:?}", self.name)))
     }
 }
 
@@ -946,7 +947,13 @@ impl<'a> RasterPassBuilder<'a> {
         if let Some(f) = self.fragment {
             shader.require_entry(f, wgpu::ShaderStages::FRAGMENT)?;
         }
-        if self.counted && !shader.reflection.overrides.iter().any(|o| o == "FILL_COUNT") {
+        if self.counted
+            && !shader
+                .reflection
+                .overrides
+                .iter()
+                .any(|o| o == "FILL_COUNT")
+        {
             return Err(GpuError::Invalid(format!(
                 "pass {}: counted, but {} declares no FILL_COUNT override (compose it with frame.wgsl)",
                 self.name, shader.label
@@ -1084,7 +1091,11 @@ mod tests {
         ));
         assert_eq!(g0[0].visibility, wgpu::ShaderStages::COMPUTE);
         let g1 = r.group(1);
-        let ty = |n: &str| g1.iter().find(|b| b.name == n).map(|b| (b.ty, b.visibility));
+        let ty = |n: &str| {
+            g1.iter()
+                .find(|b| b.name == n)
+                .map(|b| (b.ty, b.visibility))
+        };
         // textureLoad only: non-filterable; sampled with a filtering sampler: filterable.
         assert_eq!(
             ty("loaded"),

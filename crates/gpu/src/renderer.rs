@@ -9,9 +9,9 @@ use wgpu::util::DeviceExt;
 use std::sync::OnceLock;
 
 use crate::frame::Frame;
+use crate::gbuffer::{GBuffer, GBufferPass, LightProjection, LightView, ShadowMap, ViewUniform};
 use crate::impostor::ImpostorPass;
 use crate::pass::{BindGroupSchema, RasterPass, Shader};
-use crate::gbuffer::{GBuffer, GBufferPass, LightProjection, LightView, ShadowMap, ViewUniform};
 use crate::profiling::{FrameMode, PassProfiler};
 use crate::scene_upload::{GpuLight, GpuScene, gpu_light};
 use crate::shader;
@@ -490,7 +490,16 @@ mod tests {
 
     #[test]
     fn uniforms_match_their_wgsl() {
-        crate::assert_wgsl_layout!(shader::compose_method(""), FrameUniforms { view_proj, eye, forward, resolution, counts });
+        crate::assert_wgsl_layout!(
+            shader::compose_method(""),
+            FrameUniforms {
+                view_proj,
+                eye,
+                forward,
+                resolution,
+                counts
+            }
+        );
         crate::assert_wgsl_layout!(shader::compose(shader::DIRECT_WGSL), DirectUniform as "DirectLight" { light, face_view_proj, params });
     }
 }

@@ -395,15 +395,41 @@ mod tests {
     #[test]
     fn scene_tables_match_common_wgsl() {
         let src = crate::shader::COMMON_WGSL;
-        crate::assert_wgsl_layout!(src, GpuObject { kind, material, first_triangle, triangle_count, p0, p1, p2, p3 });
+        crate::assert_wgsl_layout!(
+            src,
+            GpuObject {
+                kind,
+                material,
+                first_triangle,
+                triangle_count,
+                p0,
+                p1,
+                p2,
+                p3
+            }
+        );
         crate::assert_wgsl_layout!(src, GpuMaterial { kind, ior, color });
-        crate::assert_wgsl_layout!(src, GpuLight { kind, cone_rad, falloff_rad, position, direction, power });
+        crate::assert_wgsl_layout!(
+            src,
+            GpuLight {
+                kind,
+                cone_rad,
+                falloff_rad,
+                position,
+                direction,
+                power
+            }
+        );
         crate::assert_wgsl_layout!(src, GpuWave { k_amp_phase });
     }
 
     #[test]
     fn vertex_layout_matches_the_struct() {
-        let offsets: Vec<u64> = SceneVertex::LAYOUT.attributes.iter().map(|a| a.offset).collect();
+        let offsets: Vec<u64> = SceneVertex::LAYOUT
+            .attributes
+            .iter()
+            .map(|a| a.offset)
+            .collect();
         assert_eq!(
             offsets,
             [

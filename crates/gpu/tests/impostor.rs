@@ -6,8 +6,7 @@ use caustics_gpu::pass::{ComputePass, Shader};
 use caustics_gpu::readback::read_buffer_bytes;
 use caustics_gpu::wgpu::{self, util::DeviceExt};
 use caustics_gpu::{
-    AdapterChoice, FrameMode, GpuContext, GpuScene, PassProfiler, Renderer, RendererOptions,
-    shader,
+    AdapterChoice, FrameMode, GpuContext, GpuScene, PassProfiler, Renderer, RendererOptions, shader,
 };
 use caustics_scene::{Scene, Vec3};
 

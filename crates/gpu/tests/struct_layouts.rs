@@ -113,7 +113,10 @@ fn every_repr_c_struct_has_a_wgsl_layout_check() {
         "#[repr(C)] structs without an assert_wgsl_layout! check against their WGSL struct:\n  {}",
         missing.join("\n  ")
     );
-    assert!(checked >= 20, "only {checked} structs found: is the scan broken?");
+    assert!(
+        checked >= 20,
+        "only {checked} structs found: is the scan broken?"
+    );
 }
 
 #[test]

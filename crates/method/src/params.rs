@@ -499,12 +499,19 @@ mod tests {
         let specs = Own::specs();
         let names: Vec<_> = specs.iter().map(|s| s.name.as_str()).collect();
         assert_eq!(names, ["grid", "hull", "max_focus", "scale", "reflections"]);
-        assert_eq!(specs[0].default, json!(16), "the group default is the method's");
+        assert_eq!(
+            specs[0].default,
+            json!(16),
+            "the group default is the method's"
+        );
         assert_eq!(specs[0].doc, "Cells per side of the grid.");
         assert_eq!(specs[1].kind, "one of: prism, tight");
         assert_eq!(specs[2].range, Some(above(0.0, 1e12)));
         let p = parse_own(json!({"grid": 32, "hull": "tight", "scale": 2})).expect("valid");
-        assert_eq!((p.shared.grid, p.shared.hull, p.scale), (32, Hull::Tight, 2.0));
+        assert_eq!(
+            (p.shared.grid, p.shared.hull, p.scale),
+            (32, Hull::Tight, 2.0)
+        );
         assert_eq!(
             Value::Object(p.to_json()),
             json!({"grid": 32, "hull": "tight", "max_focus": 1000.0, "scale": 2.0, "reflections": true})
@@ -514,18 +521,36 @@ mod tests {
     #[test]
     fn every_bad_value_is_refused_by_name() {
         for (v, needle) in [
-            (json!({"grid": 0}), "grid: expected a value in [1, 256], got 0"),
+            (
+                json!({"grid": 0}),
+                "grid: expected a value in [1, 256], got 0",
+            ),
             (json!({"grid": 1.5}), "grid: expected an integer"),
             (json!({"grid": -3}), "grid: expected an integer"),
             (json!({"grid": 4294967296u64}), "grid: expected an integer"),
             (json!({"grid": "8"}), "grid: expected an integer"),
-            (json!({"hull": "round"}), "hull: expected one of: prism, tight"),
-            (json!({"max_focus": 0.0}), "max_focus: expected a value in (0, 1000000000000]"),
-            (json!({"max_focus": 1e308}), "max_focus: expected a value in"),
+            (
+                json!({"hull": "round"}),
+                "hull: expected one of: prism, tight",
+            ),
+            (
+                json!({"max_focus": 0.0}),
+                "max_focus: expected a value in (0, 1000000000000]",
+            ),
+            (
+                json!({"max_focus": 1e308}),
+                "max_focus: expected a value in",
+            ),
             (json!({"scale": 1e39}), "scale: expected a number within"),
-            (json!({"reflections": 1}), "reflections: expected true or false"),
+            (
+                json!({"reflections": 1}),
+                "reflections: expected true or false",
+            ),
             (json!({"grid": 200}), "grid: at most 128 with reflections"),
-            (json!({"gird": 2}), "\"gird\" is unknown; known parameters: grid, hull"),
+            (
+                json!({"gird": 2}),
+                "\"gird\" is unknown; known parameters: grid, hull",
+            ),
             (json!([1]), "expected a JSON object"),
         ] {
             let e = parse_own(v.clone()).expect_err(&v.to_string());

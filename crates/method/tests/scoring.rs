@@ -67,7 +67,8 @@ fn focus_method(ctx: &GpuContext, renderer: &Renderer) -> Focus {
         contents: bytemuck::cast_slice(&uniforms),
         usage: wgpu::BufferUsages::UNIFORM,
     });
-    let shader = Shader::new(ctx, "focus.wgsl", shader::compose_method(FOCUS_WGSL)).expect("shader");
+    let shader =
+        Shader::new(ctx, "focus.wgsl", shader::compose_method(FOCUS_WGSL)).expect("shader");
     let draw = RasterPass::builder(ctx, "focus/draw", &shader, "vs_focus")
         .frame(renderer)
         .bind(1, &[("focus", &buffer)])
