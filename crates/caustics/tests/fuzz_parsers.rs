@@ -625,6 +625,18 @@ fn hostile_param_values_of_every_method_never_panic() {
     let mut panics: Vec<String> = Vec::new();
     for m in caustics::registry::methods() {
         let specs = (m.params)();
+        // Every numeric parameter states its range (issue 18: refused by name, not
+        // accepted and clamped or overflowed later).
+        for p in &specs {
+            if p.default.is_number() {
+                assert!(
+                    p.range.is_some(),
+                    "{} {}: a numeric parameter without a stated range",
+                    m.name,
+                    p.name
+                );
+            }
+        }
         // The defaults themselves are accepted.
         let defaults: serde_json::Map<String, Value> = specs
             .iter()
@@ -691,6 +703,10 @@ fn hostile_param_values_of_every_method_never_panic() {
     assert!(
         unnamed.is_empty(),
         "refused by the method without naming the parameter: {unnamed:#?}"
+    );
+    assert!(
+        accepted.is_empty(),
+        "values no parameter of that kind should take were accepted: {accepted:#?}"
     );
     // Zero is a valid setting of some parameters (0 = off); listed for review.
     eprintln!("zero accepted (default non-zero): {}", zeros.join(", "));

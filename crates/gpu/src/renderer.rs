@@ -104,8 +104,7 @@ pub struct Renderer {
     gbuffer_pass: GBufferPass,
     impostor_pass: OnceLock<ImpostorPass>,
     camera_gbuffer: GBuffer,
-    lights: Vec<LightShadow>,
-    direct_pass: RasterPass,
+    direct: DirectLighting,
     targets: RadianceTargets,
     frame_uniforms: FrameUniforms,
     frame_buffer: wgpu::Buffer,
@@ -116,6 +115,126 @@ pub struct Renderer {
     frame_bind: wgpu::BindGroup,
     fill_counts: wgpu::Buffer,
     bytes: u64,
+}
+
+/// Direct lighting: per light a shadow map (the light G-buffer's depth) and one
+/// full-screen draw adding its shadowed direct radiance.
+struct DirectLighting {
+    pass: RasterPass,
+    lights: Vec<LightShadow>,
+}
+
+impl DirectLighting {
+    fn new(
+        ctx: &GpuContext,
+        gbuffer_pass: &GBufferPass,
+        camera_gbuffer: &GBuffer,
+        scene: &GpuScene,
+        options: RendererOptions,
+    ) -> Result<Self, GpuError> {
+        let device = &ctx.device;
+        let shader = Shader::new(ctx, "direct.wgsl", shader::compose(shader::DIRECT_WGSL))?;
+        let pass = RasterPass::fullscreen(
+            ctx,
+            "base/direct",
+            &shader,
+            "fs_main",
+            &[Some(additive_hdr_target())],
+        )
+        .caller_group(0)
+        .build()?;
+        let schema = pass
+            .schema(0)
+            .ok_or_else(|| GpuError::Invalid("direct.wgsl declares no group 0".into()))?;
+        let shadow_sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("shadow"),
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            compare: Some(wgpu::CompareFunction::LessEqual),
+            ..Default::default()
+        });
+        let bounds = scene.scene.bounds();
+        let lights = scene
+            .scene
+            .lights
+            .iter()
+            .map(|light| {
+                let res = match light {
+                    caustics_scene::Light::Point { .. } => options.cube_shadow_resolution,
+                    _ => options.shadow_resolution,
+                };
+                let view = LightView::fit(light, &bounds, res);
+                let shadow = gbuffer_pass.shadow_map(device, &view)?;
+                let uniform = direct_uniform(light, &view);
+                let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("direct light"),
+                    contents: bytemuck::bytes_of(&uniform),
+                    usage: wgpu::BufferUsages::UNIFORM,
+                });
+                let shadow_view = shadow.depth.array_view();
+                let direct_bind = schema.bind(
+                    device,
+                    &[
+                        ("gbuf_position", &camera_gbuffer.position.view),
+                        ("gbuf_normal", &camera_gbuffer.normal.view),
+                        ("gbuf_ids", &camera_gbuffer.ids.view),
+                        ("materials", &scene.materials_buffer),
+                        ("dl", &buffer),
+                        ("shadow_map", &shadow_view),
+                        ("shadow_sampler", &shadow_sampler),
+                    ],
+                )?;
+                Ok(LightShadow {
+                    view,
+                    shadow,
+                    direct_bind,
+                })
+            })
+            .collect::<Result<Vec<_>, GpuError>>()?;
+        Ok(Self { pass, lights })
+    }
+
+    fn bytes(&self) -> u64 {
+        self.lights.iter().map(|l| l.shadow.bytes()).sum()
+    }
+
+    /// Shadow maps, then one draw per light into the direct target.
+    fn record(
+        &self,
+        frame: &mut Frame<'_>,
+        gbuffer_pass: &GBufferPass,
+        scene: &GpuScene,
+        targets: &RadianceTargets,
+    ) -> Result<(), GpuError> {
+        for light in &self.lights {
+            gbuffer_pass.record_shadow_map(frame, "base/shadow_map", scene, &light.shadow)?;
+        }
+        for light in &self.lights {
+            let attachments = [load_attachment(&targets.direct.view)];
+            let mut pass = self.pass.begin(frame, &attachments, None)?;
+            pass.set_bind_group(0, &light.direct_bind, &[]);
+            pass.draw_fullscreen();
+        }
+        Ok(())
+    }
+}
+
+fn direct_uniform(light: &caustics_scene::Light, view: &LightView) -> DirectUniform {
+    let mut faces = [[[0.0f32; 4]; 4]; 6];
+    for (i, f) in view.faces.iter().enumerate() {
+        faces[i] = f.view_proj.to_cols_array_2d();
+    }
+    let orthographic = view.projection == LightProjection::Orthographic;
+    DirectUniform {
+        light: gpu_light(light),
+        face_view_proj: faces,
+        params: [
+            view.faces.len() as f32,
+            view.resolution as f32,
+            view.texel_size,
+            if orthographic { 1.0 } else { 0.0 },
+        ],
+    }
 }
 
 impl Renderer {
@@ -208,95 +327,19 @@ impl Renderer {
             ],
         )?;
 
-        // Direct lighting: one draw per light, shadowed by that light's G-buffer depth.
-        let direct_shader = Shader::new(ctx, "direct.wgsl", shader::compose(shader::DIRECT_WGSL))?;
-        let direct_pass = RasterPass::fullscreen(
-            ctx,
-            "base/direct",
-            &direct_shader,
-            "fs_main",
-            &[Some(additive_hdr_target())],
-        )
-        .caller_group(0)
-        .build()?;
-        let direct_schema = direct_pass
-            .schema(0)
-            .ok_or_else(|| GpuError::Invalid("direct.wgsl declares no group 0".into()))?;
-        let shadow_sampler = device.create_sampler(&wgpu::SamplerDescriptor {
-            label: Some("shadow"),
-            mag_filter: wgpu::FilterMode::Linear,
-            min_filter: wgpu::FilterMode::Linear,
-            compare: Some(wgpu::CompareFunction::LessEqual),
-            ..Default::default()
-        });
-        let lights = sc
-            .lights
-            .iter()
-            .map(|light| {
-                let cube = matches!(light, caustics_scene::Light::Point { .. });
-                let res = if cube {
-                    options.cube_shadow_resolution
-                } else {
-                    options.shadow_resolution
-                };
-                let view = LightView::fit(light, &bounds, res);
-                let shadow = gbuffer_pass.shadow_map(device, &view)?;
-                let mut faces = [[[0.0f32; 4]; 4]; 6];
-                for (i, f) in view.faces.iter().enumerate() {
-                    faces[i] = f.view_proj.to_cols_array_2d();
-                }
-                let uniform = DirectUniform {
-                    light: gpu_light(light),
-                    face_view_proj: faces,
-                    params: [
-                        view.faces.len() as f32,
-                        view.resolution as f32,
-                        view.texel_size,
-                        if view.projection == LightProjection::Orthographic {
-                            1.0
-                        } else {
-                            0.0
-                        },
-                    ],
-                };
-                let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some("direct light"),
-                    contents: bytemuck::bytes_of(&uniform),
-                    usage: wgpu::BufferUsages::UNIFORM,
-                });
-                let shadow_view = shadow.depth.array_view();
-                let direct_bind = direct_schema.bind(
-                    device,
-                    &[
-                        ("gbuf_position", &camera_gbuffer.position.view),
-                        ("gbuf_normal", &camera_gbuffer.normal.view),
-                        ("gbuf_ids", &camera_gbuffer.ids.view),
-                        ("materials", &scene.materials_buffer),
-                        ("dl", &buffer),
-                        ("shadow_map", &shadow_view),
-                        ("shadow_sampler", &shadow_sampler),
-                    ],
-                )?;
-                Ok(LightShadow {
-                    view,
-                    shadow,
-                    direct_bind,
-                })
-            })
-            .collect::<Result<Vec<_>, GpuError>>()?;
+        let direct = DirectLighting::new(ctx, &gbuffer_pass, &camera_gbuffer, &scene, options)?;
         let bytes = scene.bytes
             + camera_gbuffer.bytes()
             + targets.bytes()
             + fill_counts.size()
-            + lights.iter().map(|l| l.shadow.bytes()).sum::<u64>();
+            + direct.bytes();
         Ok(Self {
             device: device.clone(),
             scene,
             gbuffer_pass,
             impostor_pass: OnceLock::new(),
             camera_gbuffer,
-            lights,
-            direct_pass,
+            direct,
             targets,
             frame_uniforms,
             frame_buffer,
@@ -327,7 +370,7 @@ impl Renderer {
     /// need a light G-buffer fit their own [`LightView`] and allocate one with
     /// [`GBufferPass::light_gbuffer`].
     pub fn light(&self, i: usize) -> Option<(&LightView, &ShadowMap)> {
-        self.lights.get(i).map(|l| (&l.view, &l.shadow))
+        self.direct.lights.get(i).map(|l| (&l.view, &l.shadow))
     }
 
     /// The HDR targets.
@@ -442,20 +485,8 @@ impl Renderer {
             &self.scene,
             &self.camera_gbuffer,
         )?;
-        for light in &self.lights {
-            self.gbuffer_pass.record_shadow_map(
-                &mut frame,
-                "base/shadow_map",
-                &self.scene,
-                &light.shadow,
-            )?;
-        }
-        for light in &self.lights {
-            let attachments = [load_attachment(&self.targets.direct.view)];
-            let mut pass = self.direct_pass.begin(&mut frame, &attachments, None)?;
-            pass.set_bind_group(0, &light.direct_bind, &[]);
-            pass.draw_fullscreen();
-        }
+        self.direct
+            .record(&mut frame, &self.gbuffer_pass, &self.scene, &self.targets)?;
         Ok(frame)
     }
 
