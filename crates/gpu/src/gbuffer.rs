@@ -12,7 +12,10 @@ pub use crate::light_view::{LightFace, LightProjection, LightView};
 use crate::pass::{BindGroupSchema, RasterPass, Shader};
 use crate::scene_upload::{GpuScene, SceneVertex};
 use crate::shader;
-use crate::textures::{DEPTH_FORMAT, IDS_FORMAT, NORMAL_FORMAT, POSITION_FORMAT, Target};
+use crate::textures::{
+    DEPTH_FORMAT, IDS_FORMAT, NORMAL_FORMAT, POSITION_FORMAT, Target, depth_test_state,
+    opaque_target,
+};
 use crate::{GpuContext, GpuError};
 
 /// Uniforms of one rasterized view (matches `View` in gbuffer.wgsl).
@@ -90,19 +93,13 @@ impl GBufferPass {
     /// Builds both passes.
     pub fn new(ctx: &GpuContext) -> Result<Self, GpuError> {
         let shader = Shader::new(ctx, "gbuffer.wgsl", shader::compose(shader::GBUFFER_WGSL))?;
-        let target = |format| {
-            Some(wgpu::ColorTargetState {
-                format,
-                blend: None,
-                write_mask: wgpu::ColorWrites::ALL,
-            })
-        };
+        let target = opaque_target;
         // Open cylinders, quads and heightfields are seen from both sides: no culling.
         let vertex_buffers = [Some(SceneVertex::LAYOUT)];
         let full = RasterPass::builder(ctx, "gbuffer", &shader, "vs_main")
             .caller_group(0)
             .vertex_buffers(&vertex_buffers)
-            .depth_stencil(depth_state())
+            .depth_stencil(depth_test_state())
             .fragment(
                 "fs_main",
                 &[
@@ -115,7 +112,7 @@ impl GBufferPass {
         let depth_only = RasterPass::builder(ctx, "shadow map", &shader, "vs_main")
             .caller_group(0)
             .vertex_buffers(&vertex_buffers)
-            .depth_stencil(depth_state())
+            .depth_stencil(depth_test_state())
             .build()?;
         Ok(Self { full, depth_only })
     }
@@ -324,16 +321,6 @@ fn draw_scene(pass: &mut wgpu::RenderPass<'_>, view: &wgpu::BindGroup, scene: &G
     pass.set_vertex_buffer(0, scene.vertex_buffer.slice(..));
     pass.set_index_buffer(scene.index_buffer.slice(..), wgpu::IndexFormat::Uint32);
     pass.draw_indexed(0..scene.index_count, 0, 0..1);
-}
-
-fn depth_state() -> wgpu::DepthStencilState {
-    wgpu::DepthStencilState {
-        format: DEPTH_FORMAT,
-        depth_write_enabled: Some(true),
-        depth_compare: Some(wgpu::CompareFunction::Less),
-        stencil: Default::default(),
-        bias: Default::default(),
-    }
 }
 
 fn clear_depth(view: &wgpu::TextureView) -> wgpu::RenderPassDepthStencilAttachment<'_> {

@@ -18,7 +18,7 @@ use crate::frame::Frame;
 use crate::pass::{RasterPass, Shader};
 use crate::scene_upload::{GpuScene, SceneVertex};
 use crate::shader;
-use crate::textures::{DEPTH_FORMAT, Target};
+use crate::textures::{DEPTH_FORMAT, Target, depth_test_state, opaque_target};
 use crate::{GpuContext, GpuError};
 
 /// Render pass of an impostor (vertex + fragment), composed with `common.wgsl`.
@@ -95,24 +95,12 @@ impl ImpostorPass {
             "impostor_render.wgsl",
             shader::compose(IMPOSTOR_RENDER_WGSL),
         )?;
-        let target = |format| {
-            Some(wgpu::ColorTargetState {
-                format,
-                blend: None,
-                write_mask: wgpu::ColorWrites::ALL,
-            })
-        };
+        let target = opaque_target;
         let vertex_buffers = [Some(SceneVertex::LAYOUT)];
         let pass = RasterPass::builder(ctx, "distance impostor", &shader, "vs_main")
             .caller_group(0)
             .vertex_buffers(&vertex_buffers)
-            .depth_stencil(wgpu::DepthStencilState {
-                format: DEPTH_FORMAT,
-                depth_write_enabled: Some(true),
-                depth_compare: Some(wgpu::CompareFunction::Less),
-                stencil: Default::default(),
-                bias: Default::default(),
-            })
+            .depth_stencil(depth_test_state())
             .fragment(
                 "fs_main",
                 &[target(IMPOSTOR_FORMAT), target(IMPOSTOR_IDS_FORMAT)],

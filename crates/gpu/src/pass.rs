@@ -13,10 +13,10 @@
 //! - [`ComputePass`] and [`RasterPass`] carry their profiling scope (the pass name
 //!   `"<owner>/<pass>"` of [`Frame::compute_pass`] / [`Frame::render_pass`]) and their
 //!   bind groups, set when the pass is opened. A raster pass built with
-//!   [`RasterPassBuilder::counted`] also builds its fill-counting variant (the
+//!   `.counted()` also builds its fill-counting variant (the
 //!   `FILL_COUNT` override of `frame.wgsl`) and picks it in count frames.
 //! - Group 0 of method passes is the renderer's shared group ([`Renderer::frame_layout`]):
-//!   a builder given [`ComputePassBuilder::frame`] / [`RasterPassBuilder::frame`] takes
+//!   a builder given [`PassBuilder::frame`] takes
 //!   that layout for group 0 and binds the renderer's group when the pass opens.
 //!
 //! ```no_run
@@ -75,19 +75,7 @@ pub struct Reflection {
 impl Reflection {
     /// Parses, validates and reflects `source` (no GPU needed).
     pub fn of(label: &str, source: &str) -> Result<Self, String> {
-        let module = naga::front::wgsl::parse_str(source)
-            .map_err(|e| format!("{label}: WGSL parse error:\n{}", e.emit_to_string(source)))?;
-        let info = naga::valid::Validator::new(
-            naga::valid::ValidationFlags::all(),
-            naga::valid::Capabilities::all(),
-        )
-        .validate(&module)
-        .map_err(|e| {
-            format!(
-                "{label}: WGSL validation error:\n{}",
-                e.emit_to_string(source)
-            )
-        })?;
+        let (module, info) = shader::parse_and_validate(label, source)?;
         reflect(label, &module, &info)
     }
 
@@ -607,14 +595,54 @@ pub struct ComputePass {
     kernels: Vec<(String, wgpu::ComputePipeline)>,
 }
 
-/// Declares a [`ComputePass`].
-pub struct ComputePassBuilder<'a> {
+/// Declares a pass: the shader's groups (bound, left to the caller, or the renderer's
+/// group 0) and, in `spec`, what the kind of pass needs ([`ComputeSpec`],
+/// [`RasterSpec`]).
+pub struct PassBuilder<'a, S> {
     ctx: &'a GpuContext,
     name: String,
     groups: Groups<'a>,
+    spec: S,
+}
+
+impl<'a, S> PassBuilder<'a, S> {
+    fn new(ctx: &'a GpuContext, name: &str, shader: &'a Shader, spec: S) -> Self {
+        Self {
+            ctx,
+            name: name.to_owned(),
+            groups: Groups::new(&ctx.device, shader),
+            spec,
+        }
+    }
+
+    /// Group 0 is the renderer's shared group.
+    pub fn frame(mut self, renderer: &'a Renderer) -> Self {
+        self.groups.frame = Some(renderer);
+        self
+    }
+
+    /// Binds `group` to `resources`, each named as its WGSL variable.
+    pub fn bind(mut self, group: u32, resources: &[(&'a str, &'a dyn Bindable)]) -> Self {
+        self.groups.given.insert(group, resources.to_vec());
+        self
+    }
+
+    /// `group` is set by the caller after the pass is opened (e.g. one bind group per
+    /// light view, made from [`ComputePass::schema`] / [`RasterPass::schema`]).
+    pub fn caller_group(mut self, group: u32) -> Self {
+        self.groups.caller.push(group);
+        self
+    }
+}
+
+/// What a compute pass declares: its kernels (entry points) and constants.
+pub struct ComputeSpec<'a> {
     kernels: Vec<&'a str>,
     constants: Vec<(&'a str, f64)>,
 }
+
+/// Declares a [`ComputePass`].
+pub type ComputePassBuilder<'a> = PassBuilder<'a, ComputeSpec<'a>>;
 
 impl ComputePass {
     /// Starts declaring a compute pass named `name` ("<owner>/<pass>") on `shader`.
@@ -623,13 +651,15 @@ impl ComputePass {
         name: &str,
         shader: &'a Shader,
     ) -> ComputePassBuilder<'a> {
-        ComputePassBuilder {
+        PassBuilder::new(
             ctx,
-            name: name.to_owned(),
-            groups: Groups::new(&ctx.device, shader),
-            kernels: Vec::new(),
-            constants: Vec::new(),
-        }
+            name,
+            shader,
+            ComputeSpec {
+                kernels: Vec::new(),
+                constants: Vec::new(),
+            },
+        )
     }
 
     /// The profiling scope's name.
@@ -660,46 +690,27 @@ impl ComputePass {
 }
 
 impl<'a> ComputePassBuilder<'a> {
-    /// Group 0 is the renderer's shared group.
-    pub fn frame(mut self, renderer: &'a Renderer) -> Self {
-        self.groups.frame = Some(renderer);
-        self
-    }
-
-    /// Binds `group` to `resources`, each named as its WGSL variable.
-    pub fn bind(mut self, group: u32, resources: &[(&'a str, &'a dyn Bindable)]) -> Self {
-        self.groups.given.insert(group, resources.to_vec());
-        self
-    }
-
-    /// `group` is set by the caller after [`ComputePass::begin`].
-    pub fn caller_group(mut self, group: u32) -> Self {
-        self.groups.caller.push(group);
-        self
-    }
-
     /// The entry points to build pipelines for.
     pub fn kernels(mut self, entries: &[&'a str]) -> Self {
-        self.kernels.extend_from_slice(entries);
+        self.spec.kernels.extend_from_slice(entries);
         self
     }
 
     /// Pipeline-overridable constants for every kernel.
     pub fn constants(mut self, constants: &[(&'a str, f64)]) -> Self {
-        self.constants.extend_from_slice(constants);
+        self.spec.constants.extend_from_slice(constants);
         self
     }
 
     /// Creates the layouts, bind groups and pipelines (inside a wgpu error scope).
     pub fn build(self) -> Result<ComputePass, GpuError> {
         let shader = self.groups.shader;
-        for k in &self.kernels {
+        for k in &self.spec.kernels {
             shader.require_entry(k, wgpu::ShaderStages::COMPUTE)?;
         }
         let name = self.name;
         let device = &self.ctx.device;
-        let constants = self.constants;
-        let kernels = self.kernels;
+        let ComputeSpec { kernels, constants } = self.spec;
         let groups = self.groups;
         self.ctx.checked(&format!("pass {name}"), || {
             let built = groups.build(&name)?;
@@ -783,11 +794,8 @@ pub struct RasterPass {
     counting: Option<wgpu::RenderPipeline>,
 }
 
-/// Declares a [`RasterPass`].
-pub struct RasterPassBuilder<'a> {
-    ctx: &'a GpuContext,
-    name: String,
-    groups: Groups<'a>,
+/// What a raster pass declares: its stages, targets and fixed-function state.
+pub struct RasterSpec<'a> {
     vertex: &'a str,
     vertex_buffers: &'a [Option<wgpu::VertexBufferLayout<'a>>],
     fragment: Option<&'a str>,
@@ -796,6 +804,9 @@ pub struct RasterPassBuilder<'a> {
     depth_stencil: Option<wgpu::DepthStencilState>,
     counted: bool,
 }
+
+/// Declares a [`RasterPass`].
+pub type RasterPassBuilder<'a> = PassBuilder<'a, RasterSpec<'a>>;
 
 impl RasterPass {
     /// Starts declaring a raster pass named `name` on `shader`, drawing with the
@@ -806,21 +817,23 @@ impl RasterPass {
         shader: &'a Shader,
         vertex: &'a str,
     ) -> RasterPassBuilder<'a> {
-        RasterPassBuilder {
+        PassBuilder::new(
             ctx,
-            name: name.to_owned(),
-            groups: Groups::new(&ctx.device, shader),
-            vertex,
-            vertex_buffers: &[],
-            fragment: None,
-            targets: Vec::new(),
-            primitive: wgpu::PrimitiveState {
-                cull_mode: None,
-                ..Default::default()
+            name,
+            shader,
+            RasterSpec {
+                vertex,
+                vertex_buffers: &[],
+                fragment: None,
+                targets: Vec::new(),
+                primitive: wgpu::PrimitiveState {
+                    cull_mode: None,
+                    ..Default::default()
+                },
+                depth_stencil: None,
+                counted: false,
             },
-            depth_stencil: None,
-            counted: false,
-        }
+        )
     }
 
     /// A full-screen pass: the shared `vs_fullscreen` of `common.wgsl` (one triangle
@@ -890,64 +903,46 @@ impl RasterPass {
 }
 
 impl<'a> RasterPassBuilder<'a> {
-    /// Group 0 is the renderer's shared group.
-    pub fn frame(mut self, renderer: &'a Renderer) -> Self {
-        self.groups.frame = Some(renderer);
-        self
-    }
-
-    /// Binds `group` to `resources`, each named as its WGSL variable.
-    pub fn bind(mut self, group: u32, resources: &[(&'a str, &'a dyn Bindable)]) -> Self {
-        self.groups.given.insert(group, resources.to_vec());
-        self
-    }
-
-    /// `group` is set by the caller after [`RasterPass::begin`].
-    pub fn caller_group(mut self, group: u32) -> Self {
-        self.groups.caller.push(group);
-        self
-    }
-
     /// The fragment entry point and its colour targets.
     pub fn fragment(mut self, entry: &'a str, targets: &[Option<wgpu::ColorTargetState>]) -> Self {
-        self.fragment = Some(entry);
-        self.targets = targets.to_vec();
+        self.spec.fragment = Some(entry);
+        self.spec.targets = targets.to_vec();
         self
     }
 
     /// Vertex buffer layouts (none: vertices come from `vertex_index` and storage).
     pub fn vertex_buffers(mut self, layouts: &'a [Option<wgpu::VertexBufferLayout<'a>>]) -> Self {
-        self.vertex_buffers = layouts;
+        self.spec.vertex_buffers = layouts;
         self
     }
 
     /// Primitive state (default: triangle list, no culling).
     pub fn primitive(mut self, primitive: wgpu::PrimitiveState) -> Self {
-        self.primitive = primitive;
+        self.spec.primitive = primitive;
         self
     }
 
     /// Depth/stencil state.
     pub fn depth_stencil(mut self, state: wgpu::DepthStencilState) -> Self {
-        self.depth_stencil = Some(state);
+        self.spec.depth_stencil = Some(state);
         self
     }
 
     /// Also build the fill-counting variant (`FILL_COUNT = true` in frame.wgsl), used
     /// in count frames: every camera-resolution pass that shades fragments.
     pub fn counted(mut self) -> Self {
-        self.counted = true;
+        self.spec.counted = true;
         self
     }
 
     /// Creates the layouts, bind groups and pipeline(s) (inside a wgpu error scope).
     pub fn build(self) -> Result<RasterPass, GpuError> {
         let shader = self.groups.shader;
-        shader.require_entry(self.vertex, wgpu::ShaderStages::VERTEX)?;
-        if let Some(f) = self.fragment {
+        shader.require_entry(self.spec.vertex, wgpu::ShaderStages::VERTEX)?;
+        if let Some(f) = self.spec.fragment {
             shader.require_entry(f, wgpu::ShaderStages::FRAGMENT)?;
         }
-        if self.counted
+        if self.spec.counted
             && !shader
                 .reflection
                 .overrides
@@ -961,8 +956,8 @@ impl<'a> RasterPassBuilder<'a> {
         }
         let name = self.name;
         let device = &self.ctx.device;
-        let Self {
-            groups,
+        let groups = self.groups;
+        let RasterSpec {
             vertex,
             vertex_buffers,
             fragment,
@@ -970,8 +965,7 @@ impl<'a> RasterPassBuilder<'a> {
             primitive,
             depth_stencil,
             counted,
-            ..
-        } = self;
+        } = self.spec;
         self.ctx.checked(&format!("pass {name}"), || {
             let built = groups.build(&name)?;
             let pipeline = |constants: &[(&str, f64)]| {

@@ -32,9 +32,17 @@ pub fn module(device: &wgpu::Device, label: &str, source: String) -> wgpu::Shade
 /// Parses and validates composed WGSL with naga (the compiler wgpu uses), so a broken
 /// shader fails `cargo test` before any GPU run. Every crate's shader test calls this.
 pub fn validate_wgsl(label: &str, source: &str) -> Result<(), String> {
+    parse_and_validate(label, source).map(|_| ())
+}
+
+/// The naga module and its validation info (what [`crate::pass::Reflection`] reads).
+pub(crate) fn parse_and_validate(
+    label: &str,
+    source: &str,
+) -> Result<(naga::Module, naga::valid::ModuleInfo), String> {
     let module = naga::front::wgsl::parse_str(source)
         .map_err(|e| format!("{label}: WGSL parse error:\n{}", e.emit_to_string(source)))?;
-    naga::valid::Validator::new(
+    let info = naga::valid::Validator::new(
         naga::valid::ValidationFlags::all(),
         naga::valid::Capabilities::all(),
     )
@@ -45,7 +53,7 @@ pub fn validate_wgsl(label: &str, source: &str) -> Result<(), String> {
             e.emit_to_string(source)
         )
     })?;
-    Ok(())
+    Ok((module, info))
 }
 
 #[cfg(test)]

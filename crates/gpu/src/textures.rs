@@ -30,6 +30,26 @@ pub fn additive_hdr_target() -> wgpu::ColorTargetState {
     }
 }
 
+/// A colour target written without blending (G-buffers, impostors).
+pub fn opaque_target(format: wgpu::TextureFormat) -> Option<wgpu::ColorTargetState> {
+    Some(wgpu::ColorTargetState {
+        format,
+        blend: None,
+        write_mask: wgpu::ColorWrites::ALL,
+    })
+}
+
+/// Depth test and write, nearest surface wins ([`DEPTH_FORMAT`]).
+pub fn depth_test_state() -> wgpu::DepthStencilState {
+    wgpu::DepthStencilState {
+        format: DEPTH_FORMAT,
+        depth_write_enabled: Some(true),
+        depth_compare: Some(wgpu::CompareFunction::Less),
+        stencil: Default::default(),
+        bias: Default::default(),
+    }
+}
+
 /// A colour attachment that keeps what the target holds (passes that add light).
 pub fn load_attachment(view: &wgpu::TextureView) -> Option<wgpu::RenderPassColorAttachment<'_>> {
     Some(wgpu::RenderPassColorAttachment {

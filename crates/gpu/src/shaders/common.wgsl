@@ -7,6 +7,14 @@ const INV_PI: f32 = 0.31830988618379;
 const NO_HIT: f32 = 3.0e38;
 const NONE: u32 = 0xffffffffu;
 
+// One vertex of the scene's vertex buffer (`SceneVertex::LAYOUT` in scene_upload.rs),
+// as the passes that rasterize the scene's triangles read it.
+struct SceneVertexIn {
+    @location(0) position: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) ids: vec2<u32>,
+}
+
 // The vertex stage of every full-screen pass (`caustics_gpu::pass::RasterPass::fullscreen`):
 // one triangle covering the viewport, drawn with 3 vertices.
 @vertex

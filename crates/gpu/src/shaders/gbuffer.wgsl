@@ -9,12 +9,6 @@ struct View {
 
 @group(0) @binding(0) var<uniform> view: View;
 
-struct VsIn {
-    @location(0) position: vec3<f32>,
-    @location(1) normal: vec3<f32>,
-    @location(2) ids: vec2<u32>,
-}
-
 struct VsOut {
     @builtin(position) clip: vec4<f32>,
     @location(0) world: vec3<f32>,
@@ -23,7 +17,7 @@ struct VsOut {
 }
 
 @vertex
-fn vs_main(v: VsIn) -> VsOut {
+fn vs_main(v: SceneVertexIn) -> VsOut {
     var o: VsOut;
     o.clip = view.view_proj * vec4<f32>(v.position, 1.0);
     o.world = v.position;
