@@ -45,17 +45,16 @@
 //! ```
 
 use bytemuck::{Pod, Zeroable};
-use caustics_gpu::binding::{buffers_bind_group, storage_entry, uniform_entry};
+use caustics_gpu::pass::{Bindable, ComputePass, RasterPass, Shader};
 use caustics_gpu::textures::additive_hdr_target;
-use caustics_gpu::wgpu::{self, util::DeviceExt};
-use caustics_gpu::{Frame, GpuContext, Renderer, shader};
+use caustics_gpu::wgpu;
+use caustics_gpu::{Frame, GpuContext, Renderer};
+use caustics_method::params::closed;
 use caustics_method::{
-    Capabilities, CausticsMethod, Counters, MethodError, MethodInfo, Unsupported, param_specs,
-    parse_params,
+    Capabilities, CausticsMethod, Counters, Method, MethodError, Unsupported, method_params,
 };
 use caustics_scene::Scene;
-use photon_hits::{CausticMap, PhotonHitConfig, PhotonHits};
-use serde::{Deserialize, Serialize};
+use photon_hits::{CausticMap, PhotonHitConfig, PhotonHits, storage_buffer, uniform_buffer};
 
 /// The shared photon-hit crate, for callers that read hits or the cube map back.
 pub use photon_hits;
@@ -71,127 +70,50 @@ fn pass_source(pass: &str) -> String {
 /// Registry name.
 pub const NAME: &str = "caustic-triangles";
 
-/// Parameters of `caustic-triangles` (defaults: the paper's §6 where it gives them).
-#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
-#[serde(default, deny_unknown_fields)]
-pub struct CausticTrianglesParams {
-    /// Photon hit location image, texels per side (the paper: 128).
-    pub resolution: u32,
-    /// Caustic cube map, texels per face side (the paper: 512).
-    pub cube_size: u32,
-    /// Distance maps (generator and receivers), texels per face side.
-    pub distance_map_size: u32,
-    /// Accept caustic light only where the stored distance matches (§4.3).
-    pub distance_test: bool,
-    /// Relative tolerance of the distance test.
-    pub distance_tolerance: f64,
-    /// Discard a triangle whose receiver area exceeds this × its area at the generator.
-    pub max_stretch: f64,
-}
-
-impl Default for CausticTrianglesParams {
-    fn default() -> Self {
-        Self {
-            resolution: 128,
-            cube_size: 512,
-            distance_map_size: 256,
-            distance_test: true,
-            distance_tolerance: 0.05,
-            max_stretch: 1000.0,
-        }
+method_params! {
+    /// Parameters of `caustic-triangles` (defaults: the paper's §6 where it gives them).
+    pub struct CausticTrianglesParams {
+        group
+        /// The photon hit image, distance maps and cube map (shared with `splatting`).
+        hits: PhotonHitConfig;
+        // At least 1: a triangle may always cover as much receiver area as its light had
+        // at the generator. At most 1e6, a triangle whose sides grew 1000x from the
+        // generator to the receiver: at the paper's 128² image over a generator of the
+        // scenes' size (radius 0.5-1 m) that is a triangle metres wide, a span across a
+        // silhouette rather than a caustic, and a larger bound only switches the rule
+        // off. It also stays a finite f32 on the GPU (1e308 became infinity there).
+        /// discard triangles whose receiver area exceeds this x their area at the generator
+        max_stretch: f64 = 1000.0 => closed(1.0, 1e6);
     }
 }
 
-impl CausticTrianglesParams {
-    /// The shared photon-hit settings.
-    pub fn config(&self) -> PhotonHitConfig {
-        PhotonHitConfig {
-            resolution: self.resolution,
-            distance_map_size: self.distance_map_size,
-            cube_size: self.cube_size,
-            distance_test: self.distance_test,
-            distance_tolerance: self.distance_tolerance as f32,
-        }
+impl Method for CausticTriangles {
+    type Params = CausticTrianglesParams;
+    const NAME: &'static str = NAME;
+    const SUMMARY: &'static str = "photon hit image from the light, neighbouring hits as triangles with per-vertex irradiance in a cube map with distance (no light leaks), camera lookup";
+    const SOURCE: &'static str = "Umenhoffer, Patow & Szirmay-Kalos, Caustic Triangles on the GPU (umenhoffer-patow-szirmay-kalos-caustic-triangles.txt)";
+    const CAPABILITIES: Capabilities = Capabilities {
+        surface: true,
+        volume: false,
+        reflection: true,
+        refraction: true,
+        multiple_bounces: false,
+        directional_light: true,
+        point_light: true,
+        spot_light: true,
+    };
+
+    fn check_scene(scene: &Scene, _params: &CausticTrianglesParams) -> Result<(), Unsupported> {
+        photon_hits::check_scene(scene)
     }
 
-    /// Range checks, with errors naming the parameter.
-    pub fn validate(&self) -> Result<(), MethodError> {
-        self.config().validate(NAME)?;
-        if !(self.max_stretch.is_finite() && self.max_stretch >= 1.0) {
-            return Err(MethodError::Param {
-                method: NAME,
-                message: format!(
-                    "max_stretch: expected a number >= 1, got {}",
-                    self.max_stretch
-                ),
-            });
-        }
-        Ok(())
+    fn create(
+        ctx: &GpuContext,
+        renderer: &Renderer,
+        params: &CausticTrianglesParams,
+    ) -> Result<Box<dyn CausticsMethod>, MethodError> {
+        Ok(Box::new(CausticTriangles::new(ctx, renderer, params)?))
     }
-}
-
-/// The registry entry.
-pub fn info() -> MethodInfo {
-    MethodInfo {
-        name: NAME,
-        summary: "photon hit image from the light, neighbouring hits as triangles with per-vertex irradiance in a cube map with distance (no light leaks), camera lookup",
-        source: "Umenhoffer, Patow & Szirmay-Kalos, Caustic Triangles on the GPU (umenhoffer-patow-szirmay-kalos-caustic-triangles.txt)",
-        capabilities: Capabilities {
-            surface: true,
-            volume: false,
-            reflection: true,
-            refraction: true,
-            multiple_bounces: false,
-            directional_light: true,
-            point_light: true,
-            spot_light: true,
-        },
-        params: || {
-            param_specs::<CausticTrianglesParams>(&[
-                (
-                    "resolution",
-                    "photon hit location image, texels per side (paper: 128)",
-                ),
-                (
-                    "cube_size",
-                    "caustic cube map, texels per face side (paper: 512)",
-                ),
-                (
-                    "distance_map_size",
-                    "distance maps of the generator and the receivers, texels per face side",
-                ),
-                (
-                    "distance_test",
-                    "accept caustic light only where the stored distance matches (false shows light leaks)",
-                ),
-                (
-                    "distance_tolerance",
-                    "distance test: |stored - actual| <= tolerance x actual",
-                ),
-                (
-                    "max_stretch",
-                    "discard triangles whose receiver area exceeds this x their area at the generator",
-                ),
-            ])
-        },
-        validate_params: |v| parse_params::<CausticTrianglesParams>(NAME, v)?.validate(),
-        check_scene,
-        create,
-    }
-}
-
-fn check_scene(scene: &Scene, _params: &serde_json::Value) -> Result<(), Unsupported> {
-    photon_hits::check_scene(scene)
-}
-
-fn create(
-    ctx: &GpuContext,
-    renderer: &Renderer,
-    params: &serde_json::Value,
-) -> Result<Box<dyn CausticsMethod>, MethodError> {
-    let p: CausticTrianglesParams = parse_params(NAME, params)?;
-    p.validate()?;
-    Ok(Box::new(CausticTriangles::new(ctx, renderer, &p)?))
 }
 
 /// Matches `TriUniform` in grid.wgsl.
@@ -204,29 +126,84 @@ struct TriUniform {
     _pad: u32,
 }
 
-/// Names of the triangle counters, in the order of `TRI_*` in grid.wgsl.
-const TRI_REASONS: [&str; 6] = [
-    "triangles_kept",
-    "triangles_dropped_invalid_vertex",
-    "triangles_dropped_receiver_mismatch",
-    "triangles_dropped_path_mismatch",
-    "triangles_dropped_stretched",
-    "triangles_dropped_degenerate",
+/// The triangle counters: the counter at index `TRI_*` of grid.wgsl and its name (a
+/// test checks each constant's value is its index here).
+const TRI_REASONS: [(&str, &str); 6] = [
+    ("TRI_KEPT", "triangles_kept"),
+    ("TRI_INVALID_VERTEX", "triangles_dropped_invalid_vertex"),
+    (
+        "TRI_RECEIVER_MISMATCH",
+        "triangles_dropped_receiver_mismatch",
+    ),
+    ("TRI_PATH_MISMATCH", "triangles_dropped_path_mismatch"),
+    ("TRI_STRETCHED", "triangles_dropped_stretched"),
+    ("TRI_DEGENERATE", "triangles_dropped_degenerate"),
 ];
 
 /// `caustic-triangles` bound to one scene.
 pub struct CausticTriangles {
     hits: PhotonHits,
     map: CausticMap,
-    areas_pipeline: wgpu::ComputePipeline,
-    irradiance_pipeline: wgpu::ComputePipeline,
-    raster_pipeline: wgpu::RenderPipeline,
-    compute_bind: wgpu::BindGroup,
-    raster_bind: wgpu::BindGroup,
-    vertex_irradiance: wgpu::Buffer,
-    tri_counters: wgpu::Buffer,
+    areas: ComputePass,
+    irradiance: ComputePass,
+    triangles: RasterPass,
+    buffers: TriangleBuffers,
     triangle_count: u32,
     bytes: u64,
+}
+
+/// The reconstruction's own buffers.
+struct TriangleBuffers {
+    /// `TriUniform`.
+    uniform: wgpu::Buffer,
+    /// Receiver area of each triangle, 0 where discarded.
+    tri_area: wgpu::Buffer,
+    /// ΔΦ/ΔA of each vertex (one per photon-image texel).
+    vertex_irradiance: wgpu::Buffer,
+    /// One per `TRI_*` reason.
+    tri_counters: wgpu::Buffer,
+}
+
+impl TriangleBuffers {
+    fn new(
+        ctx: &GpuContext,
+        hits: &PhotonHits,
+        triangle_count: u32,
+        max_stretch: f64,
+    ) -> Result<Self, MethodError> {
+        let device = &ctx.device;
+        Ok(ctx.checked("caustic-triangles setup", || {
+            let uniform = TriUniform {
+                layers: hits.layers,
+                resolution: hits.resolution,
+                max_stretch: max_stretch as f32,
+                _pad: 0,
+            };
+            Self {
+                uniform: uniform_buffer(device, "caustic triangles params", &uniform),
+                tri_area: storage_buffer(
+                    device,
+                    "caustic triangle areas",
+                    triangle_count.max(1) as u64 * 4,
+                    false,
+                ),
+                vertex_irradiance: storage_buffer(
+                    device,
+                    "caustic vertex irradiance",
+                    hits.texels() as u64 * 16,
+                    false,
+                ),
+                tri_counters: storage_buffer(device, "caustic triangle counters", 4 * 8, true),
+            }
+        })?)
+    }
+
+    fn bytes(&self) -> u64 {
+        self.uniform.size()
+            + self.tri_area.size()
+            + self.vertex_irradiance.size()
+            + self.tri_counters.size()
+    }
 }
 
 impl CausticTriangles {
@@ -236,180 +213,66 @@ impl CausticTriangles {
         renderer: &Renderer,
         params: &CausticTrianglesParams,
     ) -> Result<Self, MethodError> {
-        let config = params.config();
-        let hits = PhotonHits::new(ctx, renderer, NAME, &config)?;
-        let map = CausticMap::new(ctx, renderer, NAME, hits.center, hits.reach, &config)?;
-        let device = &ctx.device;
+        // §3, §4.1: the photon hit image; §4.2: the cube map it is reconstructed into.
+        let hits = PhotonHits::new(ctx, renderer, NAME, &params.hits)?;
+        let map = CausticMap::new(ctx, renderer, NAME, hits.center, hits.reach, &params.hits)?;
         let n = hits.resolution;
         let triangle_count = hits.layers * (n - 1) * (n - 1) * 2;
-        let built = ctx.checked("caustic-triangles setup", || {
-            let tri_uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("caustic triangles params"),
-                contents: bytemuck::bytes_of(&TriUniform {
-                    layers: hits.layers,
-                    resolution: n,
-                    max_stretch: params.max_stretch as f32,
-                    _pad: 0,
-                }),
-                usage: wgpu::BufferUsages::UNIFORM,
-            });
-            let storage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
-            let tri_area = device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("caustic triangle areas"),
-                size: triangle_count.max(1) as u64 * 4,
-                usage: storage,
-                mapped_at_creation: false,
-            });
-            let vertex_irradiance = device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("caustic vertex irradiance"),
-                size: hits.texels() as u64 * 16,
-                usage: storage,
-                mapped_at_creation: false,
-            });
-            let tri_counters = device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("caustic triangle counters"),
-                size: 4 * 8,
-                usage: storage | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            });
-            let cs = wgpu::ShaderStages::COMPUTE;
-            let compute_layout =
-                device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                    label: Some("caustic triangles compute"),
-                    entries: &[
-                        uniform_entry(0, cs),
-                        storage_entry(1, true, cs),
-                        storage_entry(2, false, cs),
-                        storage_entry(3, false, cs),
-                        storage_entry(4, false, cs),
-                    ],
-                });
-            let compute_bind = buffers_bind_group(
-                device,
-                "caustic triangles compute",
-                &compute_layout,
-                &[
-                    &tri_uniform,
-                    &hits.hits,
-                    &tri_area,
-                    &vertex_irradiance,
-                    &tri_counters,
-                ],
-            );
-            let vf = wgpu::ShaderStages::VERTEX_FRAGMENT;
-            let raster_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some("caustic triangles raster"),
-                entries: &[
-                    uniform_entry(0, vf),
-                    uniform_entry(1, vf),
-                    storage_entry(2, true, vf),
-                    storage_entry(3, true, vf),
-                    storage_entry(4, true, vf),
-                ],
-            });
-            let raster_bind = buffers_bind_group(
-                device,
-                "caustic triangles raster",
-                &raster_layout,
-                &[
-                    map.uniform(),
-                    &tri_uniform,
-                    &hits.hits,
-                    &tri_area,
-                    &vertex_irradiance,
-                ],
-            );
-            let layout = |label: &str, own: &wgpu::BindGroupLayout| {
-                device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                    label: Some(label),
-                    bind_group_layouts: &[Some(renderer.frame_layout()), Some(own)],
-                    immediate_size: 0,
-                })
-            };
-            let areas_module = shader::module(
-                device,
-                "caustic-triangles areas.wgsl",
-                pass_source(AREAS_WGSL),
-            );
-            let compute_pipeline_layout = layout("caustic triangles compute", &compute_layout);
-            let compute = |entry: &str| {
-                device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                    label: Some(entry),
-                    layout: Some(&compute_pipeline_layout),
-                    module: &areas_module,
-                    entry_point: Some(entry),
-                    compilation_options: Default::default(),
-                    cache: None,
-                })
-            };
-            let areas_pipeline = compute("triangle_areas");
-            let irradiance_pipeline = compute("vertex_irradiance_pass");
-            let raster_module = shader::module(
-                device,
-                "caustic-triangles triangles.wgsl",
-                pass_source(TRIANGLES_WGSL),
-            );
-            let raster_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some("caustic triangles"),
-                layout: Some(&layout("caustic triangles raster", &raster_layout)),
-                vertex: wgpu::VertexState {
-                    module: &raster_module,
-                    entry_point: Some("vs_triangle"),
-                    compilation_options: Default::default(),
-                    buffers: &[],
-                },
-                // Triangles folded over a caustic curve face the other way: both count.
-                primitive: wgpu::PrimitiveState {
-                    cull_mode: None,
-                    ..Default::default()
-                },
-                depth_stencil: None,
-                multisample: Default::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module: &raster_module,
-                    entry_point: Some("fs_triangle"),
-                    compilation_options: Default::default(),
-                    targets: &[Some(additive_hdr_target())],
-                }),
-                multiview_mask: None,
-                cache: None,
-            });
-            let bytes = tri_uniform.size()
-                + tri_area.size()
-                + vertex_irradiance.size()
-                + tri_counters.size();
-            (
-                areas_pipeline,
-                irradiance_pipeline,
-                raster_pipeline,
-                compute_bind,
-                raster_bind,
-                vertex_irradiance,
-                tri_counters,
-                bytes,
-            )
-        })?;
-        let (
-            areas_pipeline,
-            irradiance_pipeline,
-            raster_pipeline,
-            compute_bind,
-            raster_bind,
-            vertex_irradiance,
-            tri_counters,
-            own_bytes,
-        ) = built;
-        let bytes = own_bytes + hits.bytes() + map.bytes();
+        let b = TriangleBuffers::new(ctx, &hits, triangle_count, params.max_stretch)?;
+        // The discard rule and each triangle's receiver area, then ΔΦ/ΔA per vertex (§5).
+        let areas_shader =
+            Shader::new(ctx, "caustic-triangles areas.wgsl", pass_source(AREAS_WGSL))?;
+        let compute_group: [(&str, &dyn Bindable); 5] = [
+            ("tri", &b.uniform),
+            ("hits", &hits.hits),
+            ("tri_area", &b.tri_area),
+            ("vertex_irradiance", &b.vertex_irradiance),
+            ("tri_counters", &b.tri_counters),
+        ];
+        let compute = |name: &str, kernel: &str| {
+            ComputePass::builder(ctx, &format!("{NAME}/{name}"), &areas_shader)
+                .frame(renderer)
+                .bind(1, &compute_group)
+                .kernels(&[kernel])
+                .build()
+        };
+        let areas = compute("triangle_areas", "triangle_areas")?;
+        let irradiance = compute("vertex_irradiance", "vertex_irradiance_pass")?;
+        // §4.2: every kept triangle into the six faces of the cube map, additively.
+        let triangles_shader = Shader::new(
+            ctx,
+            "caustic-triangles triangles.wgsl",
+            pass_source(TRIANGLES_WGSL),
+        )?;
+        // No culling (the builder's default): triangles folded over a caustic curve
+        // face the other way, and both count.
+        let triangles = RasterPass::builder(
+            ctx,
+            &format!("{NAME}/triangles"),
+            &triangles_shader,
+            "vs_triangle",
+        )
+        .frame(renderer)
+        .bind(
+            1,
+            &[
+                ("cm", map.uniform()),
+                ("tri", &b.uniform),
+                ("hits", &hits.hits),
+                ("tri_area", &b.tri_area),
+                ("vertex_irradiance", &b.vertex_irradiance),
+            ],
+        )
+        .fragment("fs_triangle", &[Some(additive_hdr_target())])
+        .build()?;
+        let bytes = b.bytes() + hits.bytes() + map.bytes();
         Ok(Self {
             hits,
             map,
-            areas_pipeline,
-            irradiance_pipeline,
-            raster_pipeline,
-            compute_bind,
-            raster_bind,
-            vertex_irradiance,
-            tri_counters,
+            areas,
+            irradiance,
+            triangles,
+            buffers: b,
             triangle_count,
             bytes,
         })
@@ -430,8 +293,8 @@ impl CausticTriangles {
     pub fn read_vertex_irradiance(&self, ctx: &GpuContext) -> Result<Vec<[f32; 4]>, MethodError> {
         let bytes = caustics_gpu::readback::read_buffer_bytes(
             ctx,
-            &self.vertex_irradiance,
-            self.vertex_irradiance.size(),
+            &self.buffers.vertex_irradiance,
+            self.buffers.vertex_irradiance.size(),
             "caustic vertex irradiance",
         )?;
         Ok(bytemuck::pod_collect_to_vec(&bytes))
@@ -440,30 +303,20 @@ impl CausticTriangles {
 
 impl CausticsMethod for CausticTriangles {
     fn record(&mut self, frame: &mut Frame<'_>) -> Result<(), MethodError> {
-        let renderer = frame.renderer;
         self.hits.record(frame)?;
-        frame.encoder.clear_buffer(&self.tri_counters, 0, None);
+        frame
+            .encoder
+            .clear_buffer(&self.buffers.tri_counters, 0, None);
+        self.areas
+            .begin(frame)?
+            .dispatch("triangle_areas", [self.triangle_count.div_ceil(64), 1, 1])?;
+        self.irradiance.begin(frame)?.dispatch(
+            "vertex_irradiance_pass",
+            [self.hits.texels().div_ceil(64), 1, 1],
+        )?;
         {
-            let mut pass = frame.compute_pass("caustic-triangles/triangle_areas")?;
-            pass.set_pipeline(&self.areas_pipeline);
-            pass.set_bind_group(0, renderer.frame_bind_group(), &[]);
-            pass.set_bind_group(1, &self.compute_bind, &[]);
-            pass.dispatch_workgroups(self.triangle_count.div_ceil(64), 1, 1);
-        }
-        {
-            let mut pass = frame.compute_pass("caustic-triangles/vertex_irradiance")?;
-            pass.set_pipeline(&self.irradiance_pipeline);
-            pass.set_bind_group(0, renderer.frame_bind_group(), &[]);
-            pass.set_bind_group(1, &self.compute_bind, &[]);
-            pass.dispatch_workgroups(self.hits.texels().div_ceil(64), 1, 1);
-        }
-        {
-            let mut pass = self
-                .map
-                .begin_reconstruction(frame, "caustic-triangles/triangles")?;
-            pass.set_pipeline(&self.raster_pipeline);
-            pass.set_bind_group(0, renderer.frame_bind_group(), &[]);
-            pass.set_bind_group(1, &self.raster_bind, &[]);
+            let target = self.map.reconstruction_attachment();
+            let mut pass = self.triangles.begin(frame, &target, None)?;
             for face in 0..6 {
                 self.map.set_face(&mut pass, face);
                 pass.draw(0..3 * self.triangle_count, face..face + 1);
@@ -476,12 +329,12 @@ impl CausticsMethod for CausticTriangles {
         let mut out = self.hits.counters(ctx)?;
         let c = caustics_gpu::readback::read_buffer_u32(
             ctx,
-            &self.tri_counters,
-            self.tri_counters.size(),
+            &self.buffers.tri_counters,
+            self.buffers.tri_counters.size(),
             "caustic triangle counters",
         )?;
         out.insert("triangles".into(), self.triangle_count as u64);
-        for (name, v) in TRI_REASONS.iter().zip(&c) {
+        for ((_, name), v) in TRI_REASONS.iter().zip(&c) {
             out.insert((*name).into(), *v as u64);
         }
         Ok(out)
@@ -495,11 +348,38 @@ impl CausticsMethod for CausticTriangles {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use caustics_gpu::shader;
+    use caustics_method::params::parse;
+    use photon_hits::wgsl_u32_const;
 
     #[test]
     fn shaders_validate() -> Result<(), String> {
         shader::validate_wgsl("areas.wgsl", &pass_source(AREAS_WGSL))?;
         shader::validate_wgsl("triangles.wgsl", &pass_source(TRIANGLES_WGSL))
+    }
+
+    #[test]
+    fn tri_uniform_matches_its_wgsl() {
+        caustics_gpu::assert_wgsl_layout!(
+            pass_source(AREAS_WGSL),
+            TriUniform {
+                layers,
+                resolution,
+                max_stretch,
+                _pad
+            }
+        );
+    }
+
+    #[test]
+    fn counter_names_follow_the_wgsl_constants() {
+        for (index, (constant, _)) in TRI_REASONS.iter().enumerate() {
+            assert_eq!(
+                wgsl_u32_const(GRID_WGSL, constant),
+                Some(index as u32),
+                "{constant}"
+            );
+        }
     }
 
     #[test]
@@ -516,14 +396,17 @@ mod tests {
                 "distance_tolerance",
             ),
             (serde_json::json!({"max_stretch": 0.5}), "max_stretch"),
-            (serde_json::json!({"distance_test": "yes"}), "invalid type"),
+            (serde_json::json!({"max_stretch": 1e308}), "max_stretch"),
+            (serde_json::json!({"distance_test": "yes"}), "distance_test"),
             (serde_json::json!({"kernel_px": 4}), "known parameters"),
         ] {
-            let e = parse_params::<CausticTrianglesParams>(NAME, &json)
-                .and_then(|p| p.validate().map(|_| p));
-            let msg = e.expect_err("must fail").to_string();
+            let msg = parse::<CausticTrianglesParams>(NAME, &json)
+                .expect_err("must fail")
+                .to_string();
             assert!(msg.contains(needle) && msg.contains(NAME), "{msg}");
         }
-        assert!(CausticTrianglesParams::default().validate().is_ok());
+        let p = parse::<CausticTrianglesParams>(NAME, &serde_json::Value::Null).expect("defaults");
+        assert_eq!(p, CausticTrianglesParams::default());
+        assert_eq!((p.hits.resolution, p.max_stretch), (128, 1000.0));
     }
 }

@@ -98,9 +98,12 @@ fn flat_refractor_vertices_carry_the_analytic_irradiance() {
     let path = flat_refractor_scene(tmp.path(), [d.x as f64, d.y as f64, d.z as f64], irradiance);
     let (ctx, renderer) = renderer(&path);
     let params = CausticTrianglesParams {
-        resolution: 40,
-        cube_size: 256,
-        distance_map_size: 512,
+        hits: photon_hits::PhotonHitConfig {
+            resolution: 40,
+            cube_size: 256,
+            distance_map_size: 512,
+            ..Default::default()
+        },
         ..Default::default()
     };
     let mut m = CausticTriangles::new(&ctx, &renderer, &params).expect("method");
@@ -111,7 +114,7 @@ fn flat_refractor_vertices_carry_the_analytic_irradiance() {
     // footprint: E_floor = T(θ) · E · cos θ.
     let cos_i = -d.y as f64;
     let t = 1.0 - fresnel(cos_i, 1.0 / 1.5);
-    let n = params.resolution as usize;
+    let n = params.hits.resolution as usize;
     let valid = |x: usize, y: usize| hits[y * n + x].valid();
     let (mut checked, mut worst) = (0, 0.0f64);
     for y in 1..n - 1 {
@@ -192,16 +195,19 @@ fn flat_mirror_vertices_carry_the_reflected_irradiance() {
     let path = common::write_scene(tmp.path(), "flat_mirror", &scene);
     let (ctx, renderer) = renderer(&path);
     let params = CausticTrianglesParams {
-        resolution: 40,
-        cube_size: 256,
-        distance_map_size: 512,
+        hits: photon_hits::PhotonHitConfig {
+            resolution: 40,
+            cube_size: 256,
+            distance_map_size: 512,
+            ..Default::default()
+        },
         ..Default::default()
     };
     let mut m = CausticTriangles::new(&ctx, &renderer, &params).expect("method");
     one_frame(&ctx, &renderer, &mut m);
     let hits = m.photon_hits().read_hits(&ctx).expect("hits");
     let e_v = m.read_vertex_irradiance(&ctx).expect("vertex irradiance");
-    let n = params.resolution as usize;
+    let n = params.hits.resolution as usize;
     let valid = |x: usize, y: usize| hits[y * n + x].valid();
     let (mut checked, mut worst) = (0, 0.0f64);
     for y in 1..n - 1 {

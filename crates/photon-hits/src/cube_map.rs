@@ -7,17 +7,15 @@
 //! [`caustics_gpu::impostor::face_view_proj`]), so lookups and rasterization agree.
 
 use bytemuck::{Pod, Zeroable};
-use caustics_gpu::binding::{texture_entry, uniform_entry};
 use caustics_gpu::impostor::face_view_proj;
+use caustics_gpu::pass::{RasterPass, Shader};
 use caustics_gpu::textures::{HDR_FORMAT, Target, additive_hdr_target, load_attachment};
-use caustics_gpu::wgpu::{self, util::DeviceExt};
-use caustics_gpu::{
-    CountedPipeline, Frame, GpuContext, ProfiledRenderPass, Renderer, pass_desc, shader,
-};
+use caustics_gpu::wgpu;
+use caustics_gpu::{Frame, GpuContext, GpuError, Renderer};
 use caustics_method::MethodError;
 use caustics_scene::{Mat4, Vec3};
 
-use crate::{LOOKUP_WGSL, PhotonHitConfig, compose};
+use crate::{LOOKUP_WGSL, PhotonHitConfig, compose, uniform_buffer};
 
 /// Matches `CausticMapUniform` in types.wgsl.
 #[repr(C)]
@@ -45,9 +43,7 @@ pub struct CausticMap {
     /// World → clip of each face (the rasterization of the reconstruction passes).
     pub faces: [Mat4; 6],
     uniform: wgpu::Buffer,
-    lookup_pipeline: CountedPipeline<wgpu::RenderPipeline>,
-    lookup_bind: wgpu::BindGroup,
-    lookup_name: String,
+    lookup: RasterPass,
     bytes: u64,
 }
 
@@ -67,7 +63,7 @@ impl CausticMap {
         let far = reach * 1.01 + 1e-3;
         let near = (far * 1e-5).max(1e-5);
         let faces: [Mat4; 6] = std::array::from_fn(|f| face_view_proj(f, center, near, far));
-        Ok(ctx.checked("caustic cube map setup", || {
+        let (atlas, uniform) = ctx.checked("caustic cube map setup", || {
             let atlas = Target::new(
                 device,
                 "caustic cube map",
@@ -77,116 +73,37 @@ impl CausticMap {
                 1,
                 wgpu::TextureUsages::empty(),
             );
-            let u = MapUniform {
-                face_view_proj: faces.map(|m| m.to_cols_array_2d()),
-                center: center.extend(0.0).to_array(),
-                params: [
-                    size as f32,
-                    if config.distance_test { 1.0 } else { 0.0 },
-                    config.distance_tolerance as f32,
-                    0.0,
-                ],
-            };
-            let uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("caustic cube map"),
-                contents: bytemuck::bytes_of(&u),
-                usage: wgpu::BufferUsages::UNIFORM,
-            });
-            let fs = wgpu::ShaderStages::FRAGMENT;
-            let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some("caustic lookup"),
-                entries: &[
-                    uniform_entry(0, fs),
-                    texture_entry(
-                        1,
-                        fs,
-                        wgpu::TextureSampleType::Float { filterable: false },
-                        wgpu::TextureViewDimension::D2,
-                    ),
-                ],
-            });
-            let lookup_bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("caustic lookup"),
-                layout: &layout,
-                entries: &[
-                    wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: uniform.as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 1,
-                        resource: wgpu::BindingResource::TextureView(&atlas.view),
-                    },
-                ],
-            });
-            let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some("caustic lookup"),
-                bind_group_layouts: &[Some(renderer.frame_layout()), Some(&layout)],
-                immediate_size: 0,
-            });
-            let module = shader::module(device, "photon-hits lookup.wgsl", compose(LOOKUP_WGSL));
-            let lookup_pipeline = CountedPipeline::new(|constants| {
-                device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                    label: Some("caustic lookup"),
-                    layout: Some(&pipeline_layout),
-                    vertex: wgpu::VertexState {
-                        module: &module,
-                        entry_point: Some("vs_fullscreen"),
-                        compilation_options: Default::default(),
-                        buffers: &[],
-                    },
-                    primitive: Default::default(),
-                    depth_stencil: None,
-                    multisample: Default::default(),
-                    fragment: Some(wgpu::FragmentState {
-                        module: &module,
-                        entry_point: Some("fs_lookup"),
-                        compilation_options: wgpu::PipelineCompilationOptions {
-                            constants,
-                            ..Default::default()
-                        },
-                        targets: &[Some(additive_hdr_target())],
-                    }),
-                    multiview_mask: None,
-                    cache: None,
-                })
-            });
-            let bytes = atlas.bytes + uniform.size();
-            Self {
-                atlas,
-                size,
-                center,
-                faces,
-                uniform,
-                lookup_pipeline,
-                lookup_bind,
-                lookup_name: format!("{method}/camera_lookup"),
-                bytes,
-            }
-        })?)
+            let uniform = uniform_buffer(
+                device,
+                "caustic cube map",
+                &MapUniform {
+                    face_view_proj: faces.map(|m| m.to_cols_array_2d()),
+                    center: center.extend(0.0).to_array(),
+                    params: [
+                        size as f32,
+                        if config.distance_test { 1.0 } else { 0.0 },
+                        config.distance_tolerance as f32,
+                        0.0,
+                    ],
+                },
+            );
+            (atlas, uniform)
+        })?;
+        let lookup = lookup_pass(ctx, renderer, method, &uniform, &atlas)?;
+        Ok(Self {
+            bytes: atlas.bytes + uniform.size(),
+            atlas,
+            size,
+            center,
+            faces,
+            uniform,
+            lookup,
+        })
     }
 
     /// The `CausticMapUniform` buffer, for the reconstruction passes' bind groups.
     pub fn uniform(&self) -> &wgpu::Buffer {
         &self.uniform
-    }
-
-    /// Opens the reconstruction pass `name`, which clears the whole atlas first.
-    pub fn begin_reconstruction<'f>(
-        &self,
-        frame: &'f mut Frame<'_>,
-        name: &str,
-    ) -> Result<ProfiledRenderPass<'f>, MethodError> {
-        let attachments = [Some(wgpu::RenderPassColorAttachment {
-            view: &self.atlas.view,
-            depth_slice: None,
-            resolve_target: None,
-            ops: wgpu::Operations {
-                load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                store: wgpu::StoreOp::Store,
-            },
-        })];
-        Ok(frame.render_pass(name, pass_desc(&attachments))?)
     }
 
     /// The atlas as the colour attachment of a reconstruction pass, cleared first.
@@ -220,13 +137,8 @@ impl CausticMap {
     /// The camera pass: adds ρ/π · E into the surface caustic target.
     pub fn record_lookup(&self, frame: &mut Frame<'_>) -> Result<(), MethodError> {
         let renderer = frame.renderer;
-        let pipeline = self.lookup_pipeline.get(frame);
-        let attachments = [load_attachment(&renderer.targets().surface.view)];
-        let mut pass = frame.render_pass(&self.lookup_name, pass_desc(&attachments))?;
-        pass.set_pipeline(pipeline);
-        pass.set_bind_group(0, renderer.frame_bind_group(), &[]);
-        pass.set_bind_group(1, &self.lookup_bind, &[]);
-        pass.draw(0..3, 0..1);
+        let target = [load_attachment(&renderer.targets().surface.view)];
+        self.lookup.begin(frame, &target, None)?.draw_fullscreen();
         Ok(())
     }
 
@@ -242,5 +154,42 @@ impl CausticMap {
     /// Bytes of GPU memory owned.
     pub fn bytes(&self) -> u64 {
         self.bytes
+    }
+}
+
+/// §4.3: the camera pass, at camera resolution (fill-counted), adding into the
+/// surface caustic target.
+fn lookup_pass(
+    ctx: &GpuContext,
+    renderer: &Renderer,
+    method: &str,
+    uniform: &wgpu::Buffer,
+    atlas: &Target,
+) -> Result<RasterPass, GpuError> {
+    let shader = Shader::new(ctx, "photon-hits lookup.wgsl", compose(LOOKUP_WGSL))?;
+    let name = format!("{method}/camera_lookup");
+    RasterPass::fullscreen(
+        ctx,
+        &name,
+        &shader,
+        "fs_lookup",
+        &[Some(additive_hdr_target())],
+    )
+    .frame(renderer)
+    .bind(1, &[("cm", uniform), ("caustic_atlas", &atlas.view)])
+    .counted()
+    .build()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn map_uniform_matches_its_wgsl() {
+        caustics_gpu::assert_wgsl_layout!(
+            compose(LOOKUP_WGSL),
+            MapUniform as "CausticMapUniform" { face_view_proj, center, params }
+        );
     }
 }

@@ -38,11 +38,12 @@ mod cube_map;
 pub use cube_map::{CausticMap, face_origin};
 
 use bytemuck::{Pod, Zeroable};
-use caustics_gpu::binding::{impostor_entries, storage_entry, texture_entry, uniform_entry};
 use caustics_gpu::impostor::{DistanceImpostor, IMPOSTOR_TRACE_WGSL, ImpostorPass, objects_bounds};
+use caustics_gpu::pass::{ComputePass, Shader};
 use caustics_gpu::wgpu::{self, util::DeviceExt};
 use caustics_gpu::{
-    Frame, GBuffer, GpuContext, LightProjection, LightView, Renderer, gbuffer::LightFace, shader,
+    Frame, GBuffer, GpuContext, GpuError, GpuScene, LightProjection, LightView, Renderer,
+    gbuffer::LightFace, shader,
 };
 use caustics_method::params::{above, closed};
 use caustics_method::{Counters, MethodError, Unsupported};
@@ -61,23 +62,24 @@ pub fn compose(pass: &str) -> String {
     shader::compose_method(&format!("{IMPOSTOR_TRACE_WGSL}\n{TYPES_WGSL}\n{pass}"))
 }
 
-/// Bytes of one `PhotonHit` (types.wgsl).
-pub const HIT_BYTES: u64 = 64;
+/// Bytes of one `PhotonHit` (types.wgsl; the layout test checks the two agree).
+pub const HIT_BYTES: u64 = std::mem::size_of::<PhotonHit>() as u64;
 
 /// Relative tolerance of the distance-map searches: a secant result further than
 /// this × the map's reach from the stored surface is a jump across a depth
 /// discontinuity, not a hit.
 const SEARCH_TOLERANCE: f32 = 2e-3;
 
-/// Why texels are invalid, in the order of `HIT_*` in types.wgsl (counter names).
-const HIT_REASONS: [&str; 7] = [
-    "photon_hits",
-    "photons_missing_generator",
-    "photons_total_internal_reflection",
-    "photons_no_exit",
-    "photons_second_bounce",
-    "photons_no_receiver",
-    "photons_specular_receiver",
+/// Why texels are invalid: the counter at index `HIT_*` of types.wgsl and its name
+/// (a test checks each constant's value is its index here).
+const HIT_REASONS: [(&str, &str); 7] = [
+    ("HIT_VALID", "photon_hits"),
+    ("HIT_NOT_GENERATOR", "photons_missing_generator"),
+    ("HIT_TIR", "photons_total_internal_reflection"),
+    ("HIT_NO_EXIT", "photons_no_exit"),
+    ("HIT_SECOND_BOUNCE", "photons_second_bounce"),
+    ("HIT_NO_RECEIVER", "photons_no_receiver"),
+    ("HIT_SPECULAR_RECEIVER", "photons_specular_receiver"),
 ];
 
 caustics_method::method_params! {
@@ -241,22 +243,131 @@ struct TraceUniform {
     view: [f32; 4],
 }
 
-/// Pass names of one method's photon-hit passes ("<method>/<pass>").
-struct PassNames {
-    gbuffer: String,
-    maps: String,
-    trace: String,
+/// The scene's caustic generator as the photon passes see it.
+struct Generator {
+    /// Object index.
+    index: usize,
+    kind: GeneratorKind,
+    /// Centre of its bounds: the distance maps' and the cube map's reference point (m).
+    center: Vec3,
+    /// Farthest vertex from `center` (m).
+    radius: f32,
+    /// The diffuse objects.
+    receivers: Vec<usize>,
+}
+
+impl Generator {
+    /// The scene's generator, or why `method` cannot render the scene.
+    fn locate(gpu_scene: &GpuScene, method: &'static str) -> Result<Self, MethodError> {
+        let scene = &gpu_scene.scene;
+        let unsupported = |reason| MethodError::Unsupported {
+            method,
+            scene: scene.name.clone(),
+            reason,
+        };
+        let (index, kind) = caustic_generator(scene).map_err(unsupported)?;
+        let center = objects_bounds(gpu_scene, &[index])
+            .map(|b| b.center())
+            .ok_or_else(|| {
+                unsupported(Unsupported(format!("objects[{index}] has no triangles")))
+            })?;
+        let radius = gpu_scene.meshes[index]
+            .positions
+            .iter()
+            .map(|p| (*p - center).length())
+            .fold(0.0f32, f32::max);
+        let receivers = scene
+            .objects
+            .iter()
+            .enumerate()
+            .filter(|(_, o)| !scene.material(o).is_specular())
+            .map(|(i, _)| i)
+            .collect();
+        Ok(Self {
+            index,
+            kind,
+            center,
+            radius,
+            receivers,
+        })
+    }
+
+    /// The tracing pass's uniform for a light view of `layers` faces of `resolution`².
+    fn trace_uniform(
+        &self,
+        view: &LightView,
+        tan_half: f32,
+        resolution: u32,
+        layers: u32,
+        maps: &DistanceMaps,
+    ) -> TraceUniform {
+        let flags = u32::from(self.kind == GeneratorKind::ClosedRefractor)
+            | (u32::from(view.projection == LightProjection::Orthographic) << 1);
+        let generator_reach = maps.generator.as_ref().map_or(0.0, |m| m.reach);
+        TraceUniform {
+            layers,
+            resolution,
+            generator: self.index as u32,
+            flags,
+            center: self.center.extend(maps.receivers.reach).to_array(),
+            generator_center: self.center.extend(generator_reach).to_array(),
+            view: [view.texel_size, tan_half, 0.0, SEARCH_TOLERANCE],
+        }
+    }
+}
+
+/// The layered distance maps of §3 around the generator's centre: the generator's own
+/// (the exit point of a closed refractor; none for an open one) and the receivers'.
+struct DistanceMaps {
+    pass: ImpostorPass,
+    generator: Option<DistanceImpostor>,
+    receivers: DistanceImpostor,
+}
+
+impl DistanceMaps {
+    fn new(
+        ctx: &GpuContext,
+        gpu_scene: &GpuScene,
+        g: &Generator,
+        size: u32,
+    ) -> Result<Self, GpuError> {
+        let pass = ImpostorPass::new(ctx)?;
+        let around = |objects: &[usize]| {
+            pass.impostor_around(&ctx.device, gpu_scene, objects, g.center, size)
+        };
+        let generator = match g.kind {
+            GeneratorKind::OpenRefractor => None,
+            _ => Some(around(&[g.index])?),
+        };
+        let receivers = around(&g.receivers)?;
+        Ok(Self {
+            pass,
+            generator,
+            receivers,
+        })
+    }
+
+    /// Rebuilt every frame, as for a dynamic scene.
+    fn record(&self, frame: &mut Frame<'_>, name: &str) -> Result<(), GpuError> {
+        let scene = frame.renderer.scene();
+        for map in self.generator.iter().chain([&self.receivers]) {
+            self.pass.record(frame, name, scene, map)?;
+        }
+        Ok(())
+    }
+
+    fn bytes(&self) -> u64 {
+        self.generator.as_ref().map_or(0, DistanceImpostor::bytes) + self.receivers.bytes()
+    }
 }
 
 /// The photon hit location image of a scene and the passes that fill it.
 pub struct PhotonHits {
-    names: PassNames,
+    gbuffer_name: String,
+    maps_name: String,
     light_gbuffer: GBuffer,
-    impostor_pass: ImpostorPass,
-    generator_map: Option<DistanceImpostor>,
-    receiver_map: DistanceImpostor,
-    trace_pipeline: wgpu::ComputePipeline,
-    trace_bind: wgpu::BindGroup,
+    maps: DistanceMaps,
+    trace: ComputePass,
     /// `array<PhotonHit>`, one per texel of every face of the light view (face-major,
     /// then rows, then columns).
     pub hits: wgpu::Buffer,
@@ -287,190 +398,80 @@ impl PhotonHits {
     ) -> Result<Self, MethodError> {
         let gpu_scene = renderer.scene();
         let scene = &gpu_scene.scene;
-        let (generator, kind) =
-            caustic_generator(scene).map_err(|reason| MethodError::Unsupported {
-                method,
-                scene: scene.name.clone(),
-                reason,
-            })?;
-        let device = &ctx.device;
-        let center = objects_bounds(gpu_scene, &[generator])
-            .map(|b| b.center())
-            .ok_or_else(|| MethodError::Unsupported {
-                method,
-                scene: scene.name.clone(),
-                reason: Unsupported(format!("objects[{generator}] has no triangles")),
-            })?;
-        let radius = gpu_scene.meshes[generator]
-            .positions
-            .iter()
-            .map(|p| (*p - center).length())
-            .fold(0.0f32, f32::max);
-        let receivers: Vec<usize> = scene
-            .objects
-            .iter()
-            .enumerate()
-            .filter(|(_, o)| !scene.material(o).is_specular())
-            .map(|(i, _)| i)
-            .collect();
+        let g = Generator::locate(gpu_scene, method)?;
         let (view, tan_half) = photon_view(
             &scene.lights[0],
             &scene.bounds(),
-            center,
-            radius,
+            g.center,
+            g.radius,
             config.resolution,
         );
-        ctx.checked("photon hits setup", || {
-            let light_gbuffer = renderer.gbuffer_pass().light_gbuffer(device, &view);
-            let impostor_pass = ImpostorPass::new(device);
-            let generator_map = match kind {
-                GeneratorKind::OpenRefractor => None,
-                _ => Some(impostor_pass.impostor_around(
-                    device,
-                    gpu_scene,
-                    &[generator],
-                    center,
-                    config.distance_map_size,
-                )?),
-            };
-            let receiver_map = impostor_pass.impostor_around(
-                device,
-                gpu_scene,
-                &receivers,
-                center,
-                config.distance_map_size,
-            )?;
-            let layers = light_gbuffer.layers();
-            let texels = layers as u64 * config.resolution as u64 * config.resolution as u64;
-            let flags = u32::from(kind == GeneratorKind::ClosedRefractor)
-                | (u32::from(view.projection == LightProjection::Orthographic) << 1);
-            let generator_reach = generator_map.as_ref().map_or(0.0, |m| m.reach);
-            let reach = receiver_map.reach;
-            let uniform = TraceUniform {
-                layers,
-                resolution: config.resolution,
-                generator: generator as u32,
-                flags,
-                center: center.extend(receiver_map.reach).to_array(),
-                generator_center: center.extend(generator_reach).to_array(),
-                view: [view.texel_size, tan_half, 0.0, SEARCH_TOLERANCE],
-            };
-            let uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("photon trace params"),
-                contents: bytemuck::bytes_of(&uniform),
-                usage: wgpu::BufferUsages::UNIFORM,
-            });
-            let hits = device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("photon hits"),
-                size: texels * HIT_BYTES,
-                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-                mapped_at_creation: false,
-            });
-            let counters = device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("photon trace counters"),
-                size: 4 * 8,
-                usage: wgpu::BufferUsages::STORAGE
-                    | wgpu::BufferUsages::COPY_SRC
-                    | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            });
-            let cs = wgpu::ShaderStages::COMPUTE;
-            let float = wgpu::TextureSampleType::Float { filterable: false };
-            let array = wgpu::TextureViewDimension::D2Array;
-            let [g0, g1] = impostor_entries(4, cs);
-            let [r0, r1] = impostor_entries(6, cs);
-            let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some("photon trace"),
-                entries: &[
-                    uniform_entry(0, cs),
-                    texture_entry(1, cs, float, array),
-                    texture_entry(2, cs, float, array),
-                    texture_entry(3, cs, wgpu::TextureSampleType::Uint, array),
-                    g0,
-                    g1,
-                    r0,
-                    r1,
-                    storage_entry(8, false, cs),
-                    storage_entry(9, false, cs),
+        let device = &ctx.device;
+        let (light_gbuffer, maps, uniform, hits, counters) =
+            ctx.checked("photon hits setup", || -> Result<_, GpuError> {
+                // §4.1: the first surface the light meets in each texel of its view.
+                let light_gbuffer = renderer.gbuffer_pass().light_gbuffer(device, &view)?;
+                // §3: where a refracted ray leaves the generator and lands on a receiver.
+                let maps = DistanceMaps::new(ctx, gpu_scene, &g, config.distance_map_size)?;
+                let layers = light_gbuffer.layers();
+                let uniform = g.trace_uniform(&view, tan_half, config.resolution, layers, &maps);
+                let texels = layers as u64 * config.resolution as u64 * config.resolution as u64;
+                Ok((
+                    light_gbuffer,
+                    maps,
+                    uniform_buffer(device, "photon trace params", &uniform),
+                    storage_buffer(device, "photon hits", texels * HIT_BYTES, false),
+                    storage_buffer(device, "photon trace counters", 4 * 8, true),
+                ))
+            })??;
+        // §4.1: each texel's light reflected or refracted through the generator onto
+        // the receiver it lands on.
+        let shader = Shader::new(ctx, "photon-hits trace.wgsl", compose(TRACE_WGSL))?;
+        let light = [
+            &light_gbuffer.position,
+            &light_gbuffer.normal,
+            &light_gbuffer.ids,
+        ]
+        .map(|t| t.array_view());
+        // An open refractor has no generator map; the shader never reads it then.
+        let generator_map = maps.generator.as_ref().unwrap_or(&maps.receivers);
+        let trace = ComputePass::builder(ctx, &format!("{method}/trace_photons"), &shader)
+            .frame(renderer)
+            .bind(
+                1,
+                &[
+                    ("tu", &uniform),
+                    ("light_position", &light[0]),
+                    ("light_normal", &light[1]),
+                    ("light_ids", &light[2]),
+                    ("generator_map", &generator_map.normal_distance.view),
+                    ("generator_ids", &generator_map.object_ids.view),
+                    ("receiver_map", &maps.receivers.normal_distance.view),
+                    ("receiver_ids", &maps.receivers.object_ids.view),
+                    ("hits", &hits),
+                    ("trace_counters", &counters),
                 ],
-            });
-            let gen_map = generator_map.as_ref().unwrap_or(&receiver_map);
-            let position = light_gbuffer.position.array_view();
-            let normal = light_gbuffer.normal.array_view();
-            let ids = light_gbuffer.ids.array_view();
-            let tex = |binding, view| wgpu::BindGroupEntry {
-                binding,
-                resource: wgpu::BindingResource::TextureView(view),
-            };
-            let trace_bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("photon trace"),
-                layout: &layout,
-                entries: &[
-                    wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: uniform.as_entire_binding(),
-                    },
-                    tex(1, &position),
-                    tex(2, &normal),
-                    tex(3, &ids),
-                    tex(4, &gen_map.normal_distance.view),
-                    tex(5, &gen_map.object_ids.view),
-                    tex(6, &receiver_map.normal_distance.view),
-                    tex(7, &receiver_map.object_ids.view),
-                    wgpu::BindGroupEntry {
-                        binding: 8,
-                        resource: hits.as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 9,
-                        resource: counters.as_entire_binding(),
-                    },
-                ],
-            });
-            let module = shader::module(device, "photon-hits trace.wgsl", compose(TRACE_WGSL));
-            let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some("photon trace"),
-                bind_group_layouts: &[Some(renderer.frame_layout()), Some(&layout)],
-                immediate_size: 0,
-            });
-            let trace_pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some("photon trace"),
-                layout: Some(&pipeline_layout),
-                module: &module,
-                entry_point: Some("trace_photons"),
-                compilation_options: Default::default(),
-                cache: None,
-            });
-            let bytes = light_gbuffer.bytes()
-                + generator_map.as_ref().map_or(0, DistanceImpostor::bytes)
-                + receiver_map.bytes()
-                + hits.size()
-                + counters.size()
-                + uniform.size();
-            Ok::<_, caustics_gpu::GpuError>(Self {
-                names: PassNames {
-                    gbuffer: format!("{method}/light_gbuffer"),
-                    maps: format!("{method}/distance_maps"),
-                    trace: format!("{method}/trace_photons"),
-                },
-                light_gbuffer,
-                impostor_pass,
-                generator_map,
-                receiver_map,
-                trace_pipeline,
-                trace_bind,
-                hits,
-                counters,
-                layers,
-                resolution: config.resolution,
-                center,
-                reach,
-                generator,
-                texel_size: view.texel_size,
-                bytes,
-            })
-        })?
-        .map_err(MethodError::Gpu)
+            )
+            .kernels(&["trace_photons"])
+            .build()?;
+        let bytes =
+            light_gbuffer.bytes() + maps.bytes() + hits.size() + counters.size() + uniform.size();
+        Ok(Self {
+            gbuffer_name: format!("{method}/light_gbuffer"),
+            maps_name: format!("{method}/distance_maps"),
+            layers: light_gbuffer.layers(),
+            reach: maps.receivers.reach,
+            light_gbuffer,
+            maps,
+            trace,
+            hits,
+            counters,
+            resolution: config.resolution,
+            center: g.center,
+            generator: g.index,
+            texel_size: view.texel_size,
+            bytes,
+        })
     }
 
     /// Texels of the photon hit image (all faces).
@@ -482,22 +483,16 @@ impl PhotonHits {
     /// for a dynamic scene) and the tracing pass.
     pub fn record(&self, frame: &mut Frame<'_>) -> Result<(), MethodError> {
         let renderer = frame.renderer;
-        let scene = renderer.scene();
-        renderer
-            .gbuffer_pass()
-            .record(frame, &self.names.gbuffer, scene, &self.light_gbuffer)?;
-        if let Some(g) = &self.generator_map {
-            self.impostor_pass
-                .record(frame, &self.names.maps, scene, g)?;
-        }
-        self.impostor_pass
-            .record(frame, &self.names.maps, scene, &self.receiver_map)?;
+        renderer.gbuffer_pass().record(
+            frame,
+            &self.gbuffer_name,
+            renderer.scene(),
+            &self.light_gbuffer,
+        )?;
+        self.maps.record(frame, &self.maps_name)?;
         frame.encoder.clear_buffer(&self.counters, 0, None);
-        let mut pass = frame.compute_pass(&self.names.trace)?;
-        pass.set_pipeline(&self.trace_pipeline);
-        pass.set_bind_group(0, renderer.frame_bind_group(), &[]);
-        pass.set_bind_group(1, &self.trace_bind, &[]);
-        pass.dispatch_workgroups(self.texels().div_ceil(64), 1, 1);
+        let mut pass = self.trace.begin(frame)?;
+        pass.dispatch("trace_photons", [self.texels().div_ceil(64), 1, 1])?;
         Ok(())
     }
 
@@ -511,7 +506,7 @@ impl PhotonHits {
         )?;
         let mut out = Counters::new();
         out.insert("photon_texels".into(), self.texels() as u64);
-        for (name, v) in HIT_REASONS.iter().zip(&c) {
+        for ((_, name), v) in HIT_REASONS.iter().zip(&c) {
             out.insert((*name).into(), *v as u64);
         }
         Ok(out)
@@ -532,6 +527,45 @@ impl PhotonHits {
     pub fn bytes(&self) -> u64 {
         self.bytes
     }
+}
+
+/// A uniform buffer holding `value`.
+pub fn uniform_buffer<T: Pod>(device: &wgpu::Device, label: &str, value: &T) -> wgpu::Buffer {
+    device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some(label),
+        contents: bytemuck::bytes_of(value),
+        usage: wgpu::BufferUsages::UNIFORM,
+    })
+}
+
+/// A storage buffer of `size` bytes that can be read back (and cleared, if `clear`).
+pub fn storage_buffer(device: &wgpu::Device, label: &str, size: u64, clear: bool) -> wgpu::Buffer {
+    let mut usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
+    if clear {
+        usage |= wgpu::BufferUsages::COPY_DST;
+    }
+    device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size,
+        usage,
+        mapped_at_creation: false,
+    })
+}
+
+/// The value of `const NAME: u32 = <n>u;` in `source`, for tests that check a Rust
+/// table indexed by WGSL constants (counter names) against the shader.
+#[doc(hidden)]
+pub fn wgsl_u32_const(source: &str, name: &str) -> Option<u32> {
+    source.lines().find_map(|line| {
+        let rest = line.trim().strip_prefix("const ")?.strip_prefix(name)?;
+        let value = rest.trim_start().strip_prefix(": u32 =")?;
+        value
+            .trim()
+            .trim_end_matches(';')
+            .trim_end_matches('u')
+            .parse()
+            .ok()
+    })
 }
 
 /// `PhotonHit` of types.wgsl, as read back.
@@ -564,6 +598,42 @@ mod tests {
     fn shaders_validate() -> Result<(), String> {
         shader::validate_wgsl("trace.wgsl", &compose(TRACE_WGSL))?;
         shader::validate_wgsl("lookup.wgsl", &compose(LOOKUP_WGSL))
+    }
+
+    #[test]
+    fn structs_match_their_wgsl() {
+        caustics_gpu::assert_wgsl_layout!(
+            compose(TRACE_WGSL),
+            TraceUniform {
+                layers,
+                resolution,
+                generator,
+                flags,
+                center,
+                generator_center,
+                view
+            }
+        );
+        caustics_gpu::assert_wgsl_layout!(
+            compose(TRACE_WGSL),
+            PhotonHit {
+                position,
+                normal,
+                flux,
+                ids
+            }
+        );
+    }
+
+    #[test]
+    fn counter_names_follow_the_wgsl_constants() {
+        for (index, (constant, _)) in HIT_REASONS.iter().enumerate() {
+            assert_eq!(
+                wgsl_u32_const(TYPES_WGSL, constant),
+                Some(index as u32),
+                "{constant}"
+            );
+        }
     }
 
     #[test]
