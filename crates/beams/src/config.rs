@@ -1,7 +1,10 @@
-//! The configuration of the beam pipeline, shared by `static-grid` and
-//! `adaptive-beams` (each method crate exposes its own parameters and defaults).
+//! The parameters of the beam pipeline, declared once: [`BeamParams`], the group both
+//! `static-grid` and `adaptive-beams` compose (each with its own defaults), and
+//! [`Refinement`], the split oracle that only `adaptive-beams` exposes. The pipeline
+//! takes both as one [`BeamConfig`].
 
-use caustics_method::MethodError;
+use caustics_method::method_params;
+use caustics_method::params::{above, closed};
 use serde::{Deserialize, Serialize};
 
 /// Bounding volume rasterized per beam (Sect. 4.3).
@@ -16,157 +19,148 @@ pub enum HullKind {
     Tight,
 }
 
-/// Everything the beam pipeline needs beyond the scene.
-#[derive(Clone, Debug, PartialEq)]
-pub struct BeamConfig {
-    /// Cells per side of the base projected grid (two beam triangles per cell).
-    pub grid: u32,
-    /// Refinement levels (0: a static grid).
-    pub levels: u32,
-    /// Hull rasterized per beam.
-    pub hull: HullKind,
-    /// Light G-buffer resolution (texels per side).
-    pub light_resolution: u32,
-    /// Distance-impostor resolution (texels per cube face side).
-    pub impostor_resolution: u32,
-    /// Capacity of the candidate and beam buffers; more is counted as overflow.
-    pub max_beams: u32,
-    /// Split oracle, discontinuity criterion: split where corner normals differ by
-    /// more than `split_normal_deg` or depth changes faster than `split_depth_slope`
-    /// (|Δdepth| / lateral distance), and at silhouettes.
-    pub split_discontinuity: bool,
-    /// Degrees.
-    pub split_normal_deg: f64,
-    /// Dimensionless slope.
-    pub split_depth_slope: f64,
-    /// Photon-hit difference that splits: where an edge midpoint's light lands
-    /// against the linear prediction from the corners, in camera pixels (Sect. 6).
-    pub split_hit_px: f64,
-    /// Split oracle, energy criterion: split while (flux share of the beam relative to
-    /// a base-grid beam) × (A(0) / A where the beam is seen: at its receiver, or at its
-    /// narrowest in a medium) exceeds `split_energy_threshold`.
-    pub split_energy: bool,
-    /// Dimensionless.
-    pub split_energy_threshold: f64,
-    /// Split oracle, camera criterion: split while the beam's base, seen from the
-    /// camera at its central ray's closest point, spans more than `split_camera_px`.
-    pub split_camera: bool,
-    /// Pixels.
-    pub split_camera_px: f64,
-    /// Also trace the Fresnel-reflected beams of dielectrics (Sect. 6).
-    pub reflections: bool,
-    /// Sigma (pixels) of the low-pass filter on the surface caustic (Sect. 7); 0 = off.
-    pub surface_filter_px: f64,
-    /// Soft-particle fade distance of volume caustics near surfaces (m); 0 = off.
-    pub soft_depth_m: f64,
-    /// A(y) is clamped to at least A(0)/max_focus.
-    pub max_focus: f64,
+caustics_method::param_enum!(HullKind, [HullKind::Prism, HullKind::Tight]);
+
+/// Most refinement levels (the control buffer counts beams of levels 0..=4).
+pub const MAX_LEVELS: u32 = 4;
+
+method_params! {
+    /// The settings both beam methods share, a parameter group of each (the defaults
+    /// here are `static-grid`'s; `adaptive-beams` states its own grid and hull).
+    pub struct BeamParams {
+        /// cells per side of the projected grid in the light's view (2 beam triangles per cell)
+        grid: u32 = 64 => closed(1.0, 256.0);
+        /// beam volume rasterized: prism (Ernst et al. 2005) or tight (6 triangles, Sect. 4.3)
+        hull: HullKind = HullKind::Prism;
+        /// light G-buffer resolution (texels per side)
+        light_resolution: u32 = 1024 => closed(16.0, 4096.0);
+        /// distance impostor resolution (texels per cube-face side)
+        impostor_resolution: u32 = 256 => closed(16.0, 2048.0);
+        /// capacity of the beam and candidate buffers; excess is counted as overflow and warned about (at most 2^22: 1.1 GB of beams)
+        max_beams: u32 = 1 << 16 => closed(1.0, 4194304.0);
+        /// also trace the Fresnel-reflected beams of dielectrics
+        reflections: bool = true;
+        /// sigma (px) of the low-pass filter on the surface caustic (Sect. 7), 0 = off (at most 16: a (4 sigma + 1)^2 gather per pixel)
+        surface_filter_px: f64 = 1.0 => closed(0.0, 16.0);
+        /// soft-particle fade of volume caustics near surfaces (m), 0 = off (segments are clipped exactly; at most 64 m, beyond any scene)
+        soft_depth_m: f64 = 0.0 => closed(0.0, 64.0);
+        /// A(y) is clamped to >= A(0)/max_focus (a point-sampled focus is singular; 1 = no focusing, at most 1e6)
+        max_focus: f64 = 1000.0 => closed(1.0, 1e6);
+    }
+    check = max_beams_hold_the_base_grid;
 }
 
-impl BeamConfig {
-    /// Range checks, with errors naming the parameter.
-    pub fn validate(&self, method: &'static str) -> Result<(), MethodError> {
-        let err = |message: String| Err(MethodError::Param { method, message });
-        if !(1..=256).contains(&self.grid) {
-            return err(format!(
-                "grid: expected an integer in 1..=256, got {}",
-                self.grid
-            ));
-        }
-        if self.levels > 4 {
-            return err(format!(
-                "levels: expected an integer in 0..=4, got {}",
-                self.levels
-            ));
-        }
-        if !(16..=4096).contains(&self.light_resolution) {
-            return err(format!(
-                "light_resolution: expected an integer in 16..=4096, got {}",
-                self.light_resolution
-            ));
-        }
-        if !(16..=2048).contains(&self.impostor_resolution) {
-            return err(format!(
-                "impostor_resolution: expected an integer in 16..=2048, got {}",
-                self.impostor_resolution
-            ));
-        }
-        let base = 2 * self.grid * self.grid;
-        if self.max_beams < 1 || self.max_beams > (1 << 22) {
-            return err(format!(
-                "max_beams: expected an integer in 1..={}, got {}",
-                1 << 22,
-                self.max_beams
-            ));
-        }
-        if self.max_beams < base {
-            return err(format!(
-                "max_beams: {} cannot hold the {base} triangles of a {g}x{g} base grid",
-                self.max_beams,
-                g = self.grid
-            ));
-        }
-        let positive = [
-            ("split_normal_deg", self.split_normal_deg, 180.0),
-            ("split_depth_slope", self.split_depth_slope, 1e6),
-            ("split_hit_px", self.split_hit_px, 1e6),
-            ("split_energy_threshold", self.split_energy_threshold, 1e12),
-            ("split_camera_px", self.split_camera_px, 1e6),
-            ("max_focus", self.max_focus, 1e12),
-        ];
-        for (name, v, max) in positive {
-            if !(v.is_finite() && v > 0.0 && v <= max) {
-                return err(format!("{name}: expected a number in (0, {max}], got {v}"));
-            }
-        }
-        for (name, v) in [
-            ("surface_filter_px", self.surface_filter_px),
-            ("soft_depth_m", self.soft_depth_m),
-        ] {
-            if !(v.is_finite() && (0.0..=64.0).contains(&v)) {
-                return err(format!("{name}: expected a number in [0, 64], got {v}"));
-            }
-        }
-        Ok(())
+/// The rule between parameters: the beam buffers must hold the 2·grid² triangles of
+/// the base grid (refinement only adds to them).
+fn max_beams_hold_the_base_grid(p: &BeamParams) -> Result<(), String> {
+    let base = 2 * u64::from(p.grid).pow(2);
+    if u64::from(p.max_beams) < base {
+        return Err(format!(
+            "max_beams: {} cannot hold the {base} triangles of a {g}x{g} base grid",
+            p.max_beams,
+            g = p.grid
+        ));
+    }
+    Ok(())
+}
+
+method_params! {
+    /// Refinement of the projected grid by the split oracle (Sect. 4.2): the parameters
+    /// of `adaptive-beams` beyond [`BeamParams`] (defaults: the paper's Sect. 8).
+    pub struct Refinement {
+        /// refinement levels of the projected grid (0..=4)
+        levels: u32 = 3 => closed(0.0, MAX_LEVELS as f64);
+        /// split at silhouettes and surface discontinuities (Sect. 4.2)
+        split_discontinuity: bool = true;
+        /// corner normals differing by more than this split (degrees, at most 180)
+        split_normal_deg: f64 = 30.0 => above(0.0, 180.0);
+        /// corner depths changing faster than this (|Δdepth|/lateral) split (at most 1e3: 89.9°)
+        split_depth_slope: f64 = 4.0 => above(0.0, 1e3);
+        /// edge-midpoint photon hits off the linear prediction by more than this (camera px) split (Sect. 6; at most 16384, an image side)
+        split_hit_px: f64 = 1.0 => above(0.0, 16384.0);
+        /// split beams that carry much light or focus it (Sect. 4.2)
+        split_energy: bool = true;
+        /// split while flux share x A(0)/A(where seen) exceeds this (the receiver; the narrowest point in a medium; at most 1e6, the largest max_focus)
+        split_energy_threshold: f64 = 2.0 => above(0.0, 1e6);
+        /// split beams that look large from the camera (Sect. 4.2)
+        split_camera: bool = true;
+        /// split while the beam base spans more than this many pixels (at most 16384, an image side)
+        split_camera_px: f64 = 16.0 => above(0.0, 16384.0);
     }
 }
 
-/// Docs of the parameters both beam methods share, for `caustics list`.
-pub const SHARED_PARAM_DOCS: &[(&str, &str)] = &[
-    (
-        "grid",
-        "cells per side of the projected grid in the light's view (2 beam triangles per cell)",
-    ),
-    (
-        "hull",
-        "beam volume rasterized: prism (Ernst et al. 2005) or tight (6 triangles, Sect. 4.3)",
-    ),
-    (
-        "light_resolution",
-        "light G-buffer resolution (texels per side)",
-    ),
-    (
-        "impostor_resolution",
-        "distance impostor resolution (texels per cube-face side)",
-    ),
-    (
-        "max_beams",
-        "capacity of the beam and candidate buffers; excess is counted as overflow and warned about",
-    ),
-    (
-        "reflections",
-        "also trace the Fresnel-reflected beams of dielectrics",
-    ),
-    (
-        "surface_filter_px",
-        "sigma (px) of the low-pass filter on the surface caustic (Sect. 7), 0 = off",
-    ),
-    (
-        "soft_depth_m",
-        "soft-particle fade of volume caustics near surfaces (m), 0 = off (segments are clipped exactly)",
-    ),
-    (
-        "max_focus",
-        "A(y) is clamped to >= A(0)/max_focus (a point-sampled focus is singular)",
-    ),
-];
+impl Refinement {
+    /// No refinement: the static grid (level 0 only, so the oracle is never asked).
+    pub fn none() -> Self {
+        Self {
+            levels: 0,
+            split_discontinuity: false,
+            split_energy: false,
+            split_camera: false,
+            ..Self::default()
+        }
+    }
+
+    /// The enabled criteria as `split_flags` of `BeamUniforms` (types.wgsl): 1
+    /// discontinuity, 2 energy, 4 camera.
+    pub fn flags(&self) -> u32 {
+        (self.split_discontinuity as u32)
+            | ((self.split_energy as u32) << 1)
+            | ((self.split_camera as u32) << 2)
+    }
+}
+
+/// Everything the beam pipeline needs beyond the scene: the shared settings and the
+/// refinement ([`Refinement::none`] for a static grid).
+#[derive(Clone, Debug, PartialEq)]
+pub struct BeamConfig {
+    /// The shared settings.
+    pub beams: BeamParams,
+    /// The split oracle.
+    pub refinement: Refinement,
+}
+
+impl BeamConfig {
+    /// Every range and rule, the error naming the parameter.
+    pub fn check(&self) -> Result<(), String> {
+        use caustics_method::MethodParams;
+        self.beams.check()?;
+        self.refinement.check()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use caustics_method::MethodParams;
+
+    #[test]
+    fn the_base_grid_must_fit_the_beam_buffers() {
+        let p = BeamParams {
+            grid: 16,
+            max_beams: 511,
+            ..BeamParams::default()
+        };
+        let e = p.check().expect_err("511 < 2·16²");
+        assert!(e.contains("max_beams") && e.contains("512"), "{e}");
+        assert!(
+            BeamParams {
+                max_beams: 512,
+                ..p
+            }
+            .check()
+            .is_ok()
+        );
+    }
+
+    #[test]
+    fn no_refinement_is_a_valid_configuration() {
+        let c = BeamConfig {
+            beams: BeamParams::default(),
+            refinement: Refinement::none(),
+        };
+        c.check().expect("valid");
+        assert_eq!((c.refinement.levels, c.refinement.flags()), (0, 0));
+        assert_eq!(Refinement::default().flags(), 7);
+    }
+}

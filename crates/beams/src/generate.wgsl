@@ -12,28 +12,13 @@
 @group(1) @binding(10) var<storage, read_write> control: array<atomic<u32>>;
 @group(1) @binding(11) var<storage, read_write> beams: array<Beam>;
 // Indirect arguments: words 0..3 the dispatch over candidates, 4..7 the hull draw.
-// A group of its own, bound only to the kernels that write it (init_grid, advance,
-// finalize): a buffer cannot be storage and indirect in the same dispatch.
+// A group of its own, bound to the real buffer only for the kernels that write it
+// (init_grid, advance, finalize): a buffer cannot be storage and indirect in the same
+// dispatch, so the indirect ones (decide, emit) and scan see a placeholder here.
 @group(2) @binding(0) var<storage, read_write> indirect_args: array<u32, 8>;
 
-// Words of `control` (mirrors crates/beams/src/gpu_types.rs).
-const C_LEVEL: u32 = 8u;
-const C_COUNT: u32 = 9u;         // candidates in the current list
-const C_NEXT_COUNT: u32 = 10u;   // candidates of the next level
-const C_BEAM_BASE: u32 = 11u;    // first beam slot of this level's leaves
-const C_BEAM_TOTAL: u32 = 12u;   // beams after this level
-const C_OVERFLOW_CANDIDATES: u32 = 13u;
-const C_OVERFLOW_BEAMS: u32 = 14u;
-const C_BEAMS_PER_LEVEL: u32 = 15u;  // 5 words, levels 0..4
-const C_TIGHT: u32 = 20u;
-const C_PRISM: u32 = 21u;
-const C_DROPPED_INVALID: u32 = 22u;
-const C_DROPPED_DISCONTINUITY: u32 = 23u;
-const C_SPLIT_DISCONTINUITY: u32 = 24u;
-const C_SPLIT_ENERGY: u32 = 25u;
-const C_SPLIT_CAMERA: u32 = 26u;
-const C_CANDIDATES_TOTAL: u32 = 27u;
-const C_DROPPED_NO_RECEIVER: u32 = 28u;
+// The words of `control` (C_LEVEL, C_COUNT, ...) are declared once in control.rs,
+// which prepends their constants to this file.
 
 const ACTION_SPLIT: u32 = 4u;
 const SPLIT_DISCONTINUITY: u32 = 1u;

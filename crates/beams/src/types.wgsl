@@ -1,8 +1,8 @@
 // Types and beam-space geometry shared by the beam passes (generate, rasterize).
-// Mirrors crates/beams/src/gpu_types.rs.
+// Mirrored by the #[repr(C)] structs of gpu_types.rs, whose tests check every field
+// against naga's layout of these.
 
-const MAX_SPECULAR: u32 = 4u;
-const MAX_LEVELS: u32 = 4u;
+// MAX_SPECULAR and MAX_LEVELS are prepended from the Rust constants (lib.rs).
 
 // One caustic generator object: its impostor slot holds its distance map.
 struct SpecularSlot {
@@ -35,7 +35,7 @@ struct BeamUniforms {
     sigma_s_g: vec4<f32>,
     // xyz: receivers' impostor centre; w: its reach.
     receivers: vec4<f32>,
-    specular: array<SpecularSlot, 4>,
+    specular: array<SpecularSlot, MAX_SPECULAR>,
     specular_count: u32,
     grid: u32,
     levels: u32,

@@ -3,7 +3,7 @@
 //! Small images, grids and light G-buffers keep them fast.
 
 use beams::geometry::BeamSpace;
-use beams::{BeamConfig, BeamMethod, BeamRecord, HullKind};
+use beams::{BeamConfig, BeamMethod, BeamParams, BeamRecord, HullKind, Refinement};
 use caustics_gpu::readback::read_rgba32f;
 use caustics_gpu::{AdapterChoice, FrameMode, GpuContext, GpuScene, PassProfiler, Renderer};
 use caustics_method::CausticsMethod;
@@ -11,24 +11,18 @@ use caustics_scene::{Scene, Vec3};
 
 fn config() -> BeamConfig {
     BeamConfig {
-        grid: 8,
-        levels: 2,
-        hull: HullKind::Tight,
-        light_resolution: 256,
-        impostor_resolution: 64,
-        max_beams: 4096,
-        split_discontinuity: true,
-        split_normal_deg: 30.0,
-        split_depth_slope: 4.0,
-        split_hit_px: 1.0,
-        split_energy: true,
-        split_energy_threshold: 2.0,
-        split_camera: true,
-        split_camera_px: 16.0,
-        reflections: true,
-        surface_filter_px: 1.0,
-        soft_depth_m: 0.0,
-        max_focus: 1000.0,
+        beams: BeamParams {
+            grid: 8,
+            hull: HullKind::Tight,
+            light_resolution: 256,
+            impostor_resolution: 64,
+            max_beams: 4096,
+            ..BeamParams::default()
+        },
+        refinement: Refinement {
+            levels: 2,
+            ..Refinement::default()
+        },
     }
 }
 
@@ -166,10 +160,10 @@ fn refinement_is_deterministic() {
 #[test]
 fn flat_refractor_does_not_split_and_gives_the_analytic_irradiance() {
     let mut c = config();
-    c.levels = 3;
-    c.split_discontinuity = false;
+    c.refinement.levels = 3;
+    c.refinement.split_discontinuity = false;
     // The low-pass filter would spread the column's edge over a few pixels.
-    c.surface_filter_px = 0.0;
+    c.beams.surface_filter_px = 0.0;
     let mut run = Run::new(
         flat_refractor([0.0, 0.6, 4.0], [0.0, 0.0, 0.0], 2.0, false),
         &c,
@@ -214,10 +208,10 @@ fn flat_refractor_does_not_split_and_gives_the_analytic_irradiance() {
 #[test]
 fn volume_caustic_matches_the_analytic_inscattering_integral() {
     let mut c = config();
-    c.grid = 1;
-    c.levels = 0;
+    c.beams.grid = 1;
+    c.refinement.levels = 0;
     // The 4% Fresnel reflection would add a column above the slab.
-    c.reflections = false;
+    c.beams.reflections = false;
     let eye = Vec3::new(0.3, 1.0, 3.0);
     let scene = flat_refractor([0.3, 1.0, 3.0], [0.0, 1.0, 0.0], 1.0, true);
     let mut run = Run::new(scene.clone(), &c);
@@ -344,16 +338,16 @@ fn beams_have_their_geometric_area_function_and_a_hull_that_contains_them() {
 #[test]
 fn overflow_is_counted_when_the_buffers_are_too_small() {
     let mut c = config();
-    c.grid = 4;
-    c.levels = 3;
-    c.max_beams = 40;
+    c.beams.grid = 4;
+    c.refinement.levels = 3;
+    c.beams.max_beams = 40;
     let mut run = Run::new(builtin("sphere_on_plane", 64, 48), &c);
     run.frame();
     let overflow = run.counter("overflow_candidates") + run.counter("overflow_beams");
     assert!(overflow > 0, "a 40-slot buffer held every beam");
     assert!(run.counter("beams") <= 40);
     // With room, nothing overflows.
-    c.max_beams = 4096;
+    c.beams.max_beams = 4096;
     let mut roomy = Run::new(builtin("sphere_on_plane", 64, 48), &c);
     roomy.frame();
     assert_eq!(

@@ -3,54 +3,20 @@
 //! `adaptive-beams`: the same pipeline (crate `beams`) with a fixed 64×64 grid, no
 //! refinement, and Ernst et al.'s bounding prisms by default.
 
-use beams::{BeamConfig, BeamMethod, CAPABILITIES, HullKind, SHARED_PARAM_DOCS};
+use beams::{BeamConfig, BeamMethod, BeamParams, CAPABILITIES, HullKind, Refinement};
 use caustics_gpu::{GpuContext, Renderer};
-use caustics_method::{
-    CausticsMethod, MethodError, MethodInfo, Unsupported, param_specs, parse_params,
-};
+use caustics_method::{Capabilities, CausticsMethod, Method, MethodError, Unsupported};
 use caustics_scene::Scene;
-use serde::{Deserialize, Serialize};
 
 /// Registry name.
 pub const NAME: &str = "static-grid";
 
-/// Parameters of `static-grid` (default grid: the paper's 64² comparison).
-#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
-#[serde(default, deny_unknown_fields)]
-pub struct StaticGridParams {
-    /// Cells per side of the grid.
-    pub grid: u32,
-    /// `prism` or `tight`.
-    pub hull: HullKind,
-    /// Light G-buffer resolution.
-    pub light_resolution: u32,
-    /// Distance impostor resolution.
-    pub impostor_resolution: u32,
-    /// Beam buffer capacity.
-    pub max_beams: u32,
-    /// Fresnel-reflected beams of dielectrics.
-    pub reflections: bool,
-    /// Low-pass sigma on surface caustics (px).
-    pub surface_filter_px: f64,
-    /// Soft-particle fade (m).
-    pub soft_depth_m: f64,
-    /// Clamp of the focus A(0)/A(y).
-    pub max_focus: f64,
-}
-
-impl Default for StaticGridParams {
-    fn default() -> Self {
-        Self {
-            grid: 64,
-            hull: HullKind::Prism,
-            light_resolution: 1024,
-            impostor_resolution: 256,
-            max_beams: 1 << 16,
-            reflections: true,
-            surface_filter_px: 1.0,
-            soft_depth_m: 0.0,
-            max_focus: 1000.0,
-        }
+caustics_method::method_params! {
+    /// Parameters of `static-grid`: the shared beam settings only (no refinement).
+    pub struct StaticGridParams {
+        group
+        /// The beam settings; default grid: the paper's 64² comparison, with prisms.
+        beams: BeamParams = BeamParams { grid: 64, hull: HullKind::Prism, ..Default::default() };
     }
 }
 
@@ -58,66 +24,54 @@ impl StaticGridParams {
     /// The pipeline configuration: no refinement, so no split criteria.
     pub fn config(&self) -> BeamConfig {
         BeamConfig {
-            grid: self.grid,
-            levels: 0,
-            hull: self.hull,
-            light_resolution: self.light_resolution,
-            impostor_resolution: self.impostor_resolution,
-            max_beams: self.max_beams,
-            split_discontinuity: false,
-            split_normal_deg: 180.0,
-            split_depth_slope: 1e6,
-            split_hit_px: 1e6,
-            split_energy: false,
-            split_energy_threshold: 1e12,
-            split_camera: false,
-            split_camera_px: 1e6,
-            reflections: self.reflections,
-            surface_filter_px: self.surface_filter_px,
-            soft_depth_m: self.soft_depth_m,
-            max_focus: self.max_focus,
+            beams: self.beams.clone(),
+            refinement: Refinement::none(),
         }
     }
 }
 
-fn parse(params: &serde_json::Value) -> Result<BeamConfig, MethodError> {
-    let config = parse_params::<StaticGridParams>(NAME, params)?.config();
-    config.validate(NAME)?;
-    Ok(config)
-}
+/// The `static-grid` method (an instance is a [`BeamMethod`]).
+pub struct StaticGrid;
 
-/// The registry entry.
-pub fn info() -> MethodInfo {
-    MethodInfo {
-        name: NAME,
-        summary: "beams from a regular projected grid (no refinement), bounding prisms",
-        source: "Liktor & Dachsbacher 2010, as the static grids of Fig. 4 in liktor-dachsbacher-2011-adaptive-beam-tracing.txt",
-        capabilities: CAPABILITIES,
-        params: || param_specs::<StaticGridParams>(SHARED_PARAM_DOCS),
-        validate_params: |v| parse(v).map(|_| ()),
-        check_scene: |scene: &Scene, _| -> Result<(), Unsupported> { beams::check_scene(scene) },
-        create,
+impl Method for StaticGrid {
+    type Params = StaticGridParams;
+    const NAME: &'static str = NAME;
+    const SUMMARY: &'static str =
+        "beams from a regular projected grid (no refinement), bounding prisms";
+    const SOURCE: &'static str = "Liktor & Dachsbacher 2010, as the static grids of Fig. 4 in liktor-dachsbacher-2011-adaptive-beam-tracing.txt";
+    const CAPABILITIES: Capabilities = CAPABILITIES;
+
+    fn check_scene(scene: &Scene, _: &StaticGridParams) -> Result<(), Unsupported> {
+        beams::check_scene(scene)
     }
-}
 
-fn create(
-    ctx: &GpuContext,
-    renderer: &Renderer,
-    params: &serde_json::Value,
-) -> Result<Box<dyn CausticsMethod>, MethodError> {
-    let config = parse(params)?;
-    Ok(Box::new(BeamMethod::new(ctx, renderer, &config, NAME)?))
+    fn create(
+        ctx: &GpuContext,
+        renderer: &Renderer,
+        params: &StaticGridParams,
+    ) -> Result<Box<dyn CausticsMethod>, MethodError> {
+        Ok(Box::new(BeamMethod::new(
+            ctx,
+            renderer,
+            &params.config(),
+            NAME,
+        )?))
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use caustics_method::params::parse;
 
     #[test]
     fn defaults_are_a_64_grid_with_prisms_and_no_refinement() {
         let c = StaticGridParams::default().config();
-        assert_eq!((c.grid, c.levels, c.hull), (64, 0, HullKind::Prism));
-        c.validate(NAME).expect("defaults are valid");
+        assert_eq!(
+            (c.beams.grid, c.refinement.levels, c.beams.hull),
+            (64, 0, HullKind::Prism)
+        );
+        c.check().expect("defaults are valid");
     }
 
     #[test]
@@ -129,9 +83,13 @@ mod tests {
                 serde_json::json!({"light_resolution": 8}),
                 "light_resolution",
             ),
+            (serde_json::json!({"max_beams": 8191}), "max_beams"),
+            (serde_json::json!({"max_focus": 1e12}), "max_focus"),
         ] {
-            let msg = parse(&json).expect_err("must fail").to_string();
-            assert!(msg.contains(needle), "{json}: {msg}");
+            let msg = parse::<StaticGridParams>(NAME, &json)
+                .expect_err("must fail")
+                .to_string();
+            assert!(msg.contains(needle) && msg.contains(NAME), "{json}: {msg}");
         }
     }
 }

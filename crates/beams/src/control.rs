@@ -1,0 +1,157 @@
+//! The control buffer of beam generation, declared once (STYLE 13): [`CONTROL`] names
+//! each word (or run of words), its index and what it holds. The WGSL constants
+//! `C_*` of generate.wgsl are generated from it ([`wgsl`], prepended to the generate
+//! source), and so are the counters the method reports ([`counters`]).
+
+use caustics_method::Counters;
+
+use crate::MAX_LEVELS;
+
+/// Words of the control buffer (reset to zero every frame).
+pub(crate) const CONTROL_WORDS: usize = 32;
+
+/// One word, or one word per refinement level, of the control buffer.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Word {
+    /// The WGSL constant holding its index (`C_…`).
+    pub(crate) wgsl: &'static str,
+    /// Its index in the control buffer.
+    pub(crate) index: usize,
+    /// The counter it is reported as, if any; a per-level word is reported as
+    /// `<counter>_<level>` for each level run.
+    pub(crate) counter: Option<&'static str>,
+    /// One word per level 0..=MAX_LEVELS instead of one.
+    pub(crate) per_level: bool,
+    /// What it holds.
+    pub(crate) doc: &'static str,
+}
+
+/// A word the kernels use to pass the refinement along, not reported.
+const fn state(wgsl: &'static str, index: usize, doc: &'static str) -> Word {
+    Word {
+        wgsl,
+        index,
+        counter: None,
+        per_level: false,
+        doc,
+    }
+}
+
+/// A word reported as the counter `name`.
+const fn counter(wgsl: &'static str, index: usize, name: &'static str, doc: &'static str) -> Word {
+    Word {
+        counter: Some(name),
+        ..state(wgsl, index, doc)
+    }
+}
+
+/// Refinement levels run (the current level while generating).
+pub(crate) const LEVEL: Word = counter("C_LEVEL", 8, "levels_run", "refinement levels run");
+/// Beams written so far.
+pub(crate) const BEAM_TOTAL: Word = counter("C_BEAM_TOTAL", 12, "beams", "beams after this level");
+
+/// Every word, by index (words 0 to 7 and from 29 on are unused).
+#[rustfmt::skip]
+pub(crate) const CONTROL: &[Word] = &[
+    LEVEL,
+    state("C_COUNT", 9, "candidates in the current list"),
+    state("C_NEXT_COUNT", 10, "candidates of the next level"),
+    state("C_BEAM_BASE", 11, "first beam slot of this level's leaves"),
+    BEAM_TOTAL,
+    counter("C_OVERFLOW_CANDIDATES", 13, "overflow_candidates", "children that found no room in the candidate list"),
+    counter("C_OVERFLOW_BEAMS", 14, "overflow_beams", "beams that found no room in the beam buffer"),
+    Word { per_level: true, ..counter("C_BEAMS_PER_LEVEL", 15, "beams_level", "beams emitted at each level") },
+    counter("C_TIGHT", 20, "hulls_tight", "beams with a tight six-triangle hull"),
+    counter("C_PRISM", 21, "hulls_prism", "beams with a bounding prism"),
+    counter("C_DROPPED_INVALID", 22, "dropped_invalid", "leaves none of whose corner paths is valid"),
+    counter("C_DROPPED_DISCONTINUITY", 23, "dropped_discontinuity", "leaves whose corners follow different paths"),
+    counter("C_SPLIT_DISCONTINUITY", 24, "splits_discontinuity", "splits asked by the discontinuity criterion"),
+    counter("C_SPLIT_ENERGY", 25, "splits_energy", "splits asked by the energy criterion"),
+    counter("C_SPLIT_CAMERA", 26, "splits_camera", "splits asked by the camera criterion"),
+    counter("C_CANDIDATES_TOTAL", 27, "candidates", "grid triangles considered over all levels"),
+    counter("C_DROPPED_NO_RECEIVER", 28, "dropped_no_receiver", "beam families that meet no receiver (without a medium)"),
+];
+
+impl Word {
+    fn words(&self) -> usize {
+        if self.per_level {
+            MAX_LEVELS as usize + 1
+        } else {
+            1
+        }
+    }
+}
+
+/// The `C_*` constants of generate.wgsl.
+pub(crate) fn wgsl() -> String {
+    let mut out = String::from(
+        "// Words of `control`, generated from CONTROL in crates/beams/src/control.rs.\n",
+    );
+    for w in CONTROL {
+        let span = if w.per_level {
+            format!(" ({} words, levels 0..{MAX_LEVELS})", w.words())
+        } else {
+            String::new()
+        };
+        out.push_str(&format!(
+            "const {}: u32 = {}u; // {}{span}\n",
+            w.wgsl, w.index, w.doc
+        ));
+    }
+    out
+}
+
+/// The counters in the control words `c`, per-level ones for levels 0..=`levels`.
+pub(crate) fn counters(c: &[u32], levels: u32) -> Counters {
+    let mut out = Counters::new();
+    for w in CONTROL {
+        let Some(name) = w.counter else { continue };
+        if w.per_level {
+            for level in 0..=levels as usize {
+                out.insert(format!("{name}_{level}"), u64::from(c[w.index + level]));
+            }
+        } else {
+            out.insert(name.to_owned(), u64::from(c[w.index]));
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn words_are_distinct_and_fit_the_buffer() {
+        let mut used = [None; CONTROL_WORDS];
+        for w in CONTROL {
+            assert!(
+                w.index + w.words() <= CONTROL_WORDS,
+                "{} runs past the buffer",
+                w.wgsl
+            );
+            for (i, slot) in used.iter_mut().enumerate().skip(w.index).take(w.words()) {
+                if let Some(other) = slot.replace(w.wgsl) {
+                    panic!("{} and {other} share word {i}", w.wgsl);
+                }
+            }
+        }
+        let names: std::collections::BTreeSet<_> =
+            CONTROL.iter().filter_map(|w| w.counter).collect();
+        assert_eq!(
+            names.len(),
+            CONTROL.iter().filter(|w| w.counter.is_some()).count()
+        );
+    }
+
+    #[test]
+    fn counters_read_their_words() {
+        let c: Vec<u32> = (0..CONTROL_WORDS as u32).collect();
+        let out = counters(&c, 2);
+        assert_eq!(out["beams"], BEAM_TOTAL.index as u64);
+        assert_eq!(out["levels_run"], LEVEL.index as u64);
+        assert_eq!((out["beams_level_0"], out["beams_level_2"]), (15, 17));
+        assert!(!out.contains_key("beams_level_3"));
+        assert!(wgsl().contains("const C_BEAMS_PER_LEVEL: u32 = 15u;"));
+    }
+}
