@@ -1,5 +1,7 @@
 //! Headless wgpu context: adapter choice, device features, adapter description.
 
+use std::sync::{Arc, Mutex};
+
 use crate::GpuError;
 
 /// Environment variable that picks an adapter by a substring of its name.
@@ -53,6 +55,16 @@ pub struct GpuContext {
     pub summary: AdapterSummary,
     /// Features enabled on the device.
     pub features: wgpu::Features,
+    /// Device loss and errors raised outside any error scope, recorded by the device's
+    /// callbacks instead of wgpu's default (a panic), reported by [`GpuContext::check_device`].
+    faults: Arc<Mutex<DeviceFaults>>,
+}
+
+/// What the device's callbacks saw.
+#[derive(Debug, Default)]
+struct DeviceFaults {
+    lost: Option<String>,
+    uncaptured: Vec<String>,
 }
 
 /// Adapter facts, as strings so result files stay stable across wgpu versions.
@@ -176,13 +188,55 @@ impl GpuContext {
                 adapter: info.name.clone(),
                 source,
             })?;
+        let faults = Arc::new(Mutex::new(DeviceFaults::default()));
+        let on_lost = faults.clone();
+        device.set_device_lost_callback(move |reason, message| {
+            if let Ok(mut f) = on_lost.lock() {
+                f.lost = Some(format!("{reason:?}: {message}"));
+            }
+        });
+        let on_error = faults.clone();
+        device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
+            if let Ok(mut f) = on_error.lock() {
+                f.uncaptured.push(e.to_string());
+            }
+        }));
         Ok(Self {
             summary: summary(&info),
             adapter,
             device,
             queue,
             features,
+            faults,
         })
+    }
+
+    /// Fails if the device was lost (driver reset, out of memory on the device, or
+    /// destroyed) or reported an error outside every error scope since the last check
+    /// (the errors are then cleared): `what` names the work that was going on.
+    pub fn check_device(&self, what: &str) -> Result<(), GpuError> {
+        let Ok(mut f) = self.faults.lock() else {
+            return Err(GpuError::DeviceLost {
+                what: what.to_owned(),
+                reason: "device fault record poisoned".into(),
+            });
+        };
+        if let Some(reason) = &f.lost {
+            return Err(GpuError::DeviceLost {
+                what: what.to_owned(),
+                reason: reason.clone(),
+            });
+        }
+        if !f.uncaptured.is_empty() {
+            let message = f.uncaptured.join("; ");
+            f.uncaptured.clear();
+            return Err(GpuError::Validation {
+                kind: "uncaptured",
+                what: what.to_owned(),
+                message,
+            });
+        }
+        Ok(())
     }
 
     /// Whether per-pass timestamps can be taken.
@@ -213,6 +267,7 @@ impl GpuContext {
                 });
             }
         }
+        self.check_device(what)?;
         Ok(out)
     }
 

@@ -70,6 +70,15 @@ pub enum GpuError {
         /// wgpu's message.
         message: String,
     },
+    /// The device was lost (driver reset, device out of memory, destroyed): nothing
+    /// more can run on it.
+    #[error("GPU device lost during {what}: {reason}")]
+    DeviceLost {
+        /// The work that was going on.
+        what: String,
+        /// wgpu's reason and message.
+        reason: String,
+    },
     /// A shader failed to parse or validate (naga's report, with the source lines).
     #[error("{0}")]
     Shader(String),

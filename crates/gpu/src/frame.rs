@@ -164,9 +164,26 @@ impl<'a> Frame<'a> {
             started,
             ..
         } = self;
+        // Validation and out-of-memory errors of the frame's commands (reported when
+        // the encoder is finished and submitted) become errors, not wgpu's panic.
+        let oom = ctx.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+        let val = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
         ctx.queue.submit([encoder.finish()]);
-        ctx.wait_idle()?;
+        let waited = ctx.wait_idle();
         let wall_ms = started.elapsed().as_secs_f64() * 1e3;
+        let validation = pollster::block_on(val.pop());
+        let memory = pollster::block_on(oom.pop());
+        for (kind, err) in [("validation", validation), ("out of memory", memory)] {
+            if let Some(e) = err {
+                return Err(GpuError::Validation {
+                    kind,
+                    what: "frame submission".into(),
+                    message: e.to_string(),
+                });
+            }
+        }
+        ctx.check_device("frame")?;
+        waited?;
         profiler.resolve_frame(ctx, wall_ms);
         Ok(())
     }

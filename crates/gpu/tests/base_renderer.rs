@@ -323,3 +323,52 @@ fn subpixel_offset_shifts_the_camera_gbuffer_samples() {
         assert!(checked >= 3, "too few floor pixels checked ({checked})");
     }
 }
+
+/// GPU faults are errors, never wgpu's panic: an error raised outside every error
+/// scope is reported (once) by the next check, a readback past a buffer's end is an
+/// error naming what was read, and a frame on a lost device fails with `DeviceLost`.
+#[test]
+fn device_faults_are_errors_not_panics() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let (ctx, renderer) = render(&small_copy(dir.path(), "sphere_on_plane", 16, 12));
+    ctx.check_device("a clean frame").expect("no fault yet");
+
+    // mapped_at_creation needs a size that is a multiple of 4: a validation error
+    // outside any scope, which wgpu's default handler would turn into a panic.
+    let _bad = ctx
+        .device
+        .create_buffer(&caustics_gpu::wgpu::BufferDescriptor {
+            label: Some("deliberately invalid"),
+            size: 3,
+            usage: caustics_gpu::wgpu::BufferUsages::MAP_WRITE,
+            mapped_at_creation: true,
+        });
+    let e = ctx
+        .check_device("the invalid buffer")
+        .expect_err("the uncaptured error is reported");
+    assert!(e.to_string().contains("the invalid buffer"), "{e}");
+    ctx.check_device("after the report").expect("reported once");
+
+    let small = ctx
+        .device
+        .create_buffer(&caustics_gpu::wgpu::BufferDescriptor {
+            label: Some("small"),
+            size: 16,
+            usage: caustics_gpu::wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+    let e = caustics_gpu::readback::read_buffer_bytes(&ctx, &small, 64, "sixty-four bytes")
+        .expect_err("reading past the end");
+    assert!(e.to_string().contains("sixty-four bytes"), "{e}");
+
+    ctx.device.destroy();
+    let mut profiler = PassProfiler::new(&ctx, 1);
+    let result = renderer
+        .begin_frame(&mut profiler, FrameMode::Timed)
+        .and_then(|frame| frame.submit(&ctx));
+    let e = result.expect_err("a frame on a destroyed device");
+    assert!(
+        matches!(e, caustics_gpu::GpuError::DeviceLost { .. }),
+        "expected DeviceLost, got {e}"
+    );
+}
