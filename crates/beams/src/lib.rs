@@ -165,7 +165,6 @@ pub struct BeamMethod {
     impostor_pass: ImpostorPass,
     atlas: ImpostorAtlas,
     buffers: Buffers,
-    raw_surface: Target,
     generate: ComputePass,
     /// Group 2 of `generate` for the kernels that write the indirect arguments.
     args: wgpu::BindGroup,
@@ -182,8 +181,9 @@ struct PassNames {
     impostors: String,
 }
 
-/// The buffers of beam generation, sized by `max_beams`.
+/// The buffers of beam generation, sized by `max_beams`, and the raw surface caustic.
 struct Buffers {
+    raw_surface: Target,
     uniforms: wgpu::Buffer,
     candidates_a: wgpu::Buffer,
     candidates_b: wgpu::Buffer,
@@ -198,7 +198,12 @@ struct Buffers {
 }
 
 impl Buffers {
-    fn new(device: &wgpu::Device, config: &BeamConfig, uniforms: &BeamUniforms) -> Self {
+    fn new(
+        device: &wgpu::Device,
+        camera: &caustics_scene::Camera,
+        config: &BeamConfig,
+        uniforms: &BeamUniforms,
+    ) -> Self {
         let init = |label: &str, contents: &[u8], usage| {
             device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some(label),
@@ -219,6 +224,15 @@ impl Buffers {
         let copy = wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC;
         let filter = FilterUniforms::new(config.beams.surface_filter_px);
         Self {
+            raw_surface: Target::new(
+                device,
+                "beam raw surface caustic",
+                HDR_FORMAT,
+                camera.width,
+                camera.height,
+                1,
+                wgpu::TextureUsages::empty(),
+            ),
             uniforms: init(
                 "beam uniforms",
                 bytemuck::bytes_of(uniforms),
@@ -246,22 +260,23 @@ impl Buffers {
     }
 
     fn bytes(&self) -> u64 {
-        [
-            &self.uniforms,
-            &self.candidates_a,
-            &self.candidates_b,
-            &self.actions,
-            &self.offsets,
-            &self.beams,
-            &self.control,
-            &self.control_init,
-            &self.indirect_args,
-            &self.args_placeholder,
-            &self.filter_uniforms,
-        ]
-        .iter()
-        .map(|b| b.size())
-        .sum()
+        self.raw_surface.bytes
+            + [
+                &self.uniforms,
+                &self.candidates_a,
+                &self.candidates_b,
+                &self.actions,
+                &self.offsets,
+                &self.beams,
+                &self.control,
+                &self.control_init,
+                &self.indirect_args,
+                &self.args_placeholder,
+                &self.filter_uniforms,
+            ]
+            .iter()
+            .map(|b| b.size())
+            .sum::<u64>()
     }
 }
 
@@ -317,17 +332,7 @@ impl BeamMethod {
         let impostor_pass = ImpostorPass::new(ctx)?;
         let atlas = impostor_atlas(device, renderer, &impostor_pass, slots, config)?;
         let uniforms = BeamUniforms::new(scene, config, view, slots, &atlas);
-        let b = Buffers::new(device, config, &uniforms);
-        let cam = &scene.camera;
-        let raw_surface = Target::new(
-            device,
-            "beam raw surface caustic",
-            HDR_FORMAT,
-            cam.width,
-            cam.height,
-            1,
-            wgpu::TextureUsages::empty(),
-        );
+        let b = Buffers::new(device, &scene.camera, config, &uniforms);
 
         let shader = Shader::new(ctx, "beams generate.wgsl", generate_source())?;
         let generate = ComputePass::builder(ctx, &format!("{name}/generate"), &shader)
@@ -352,14 +357,8 @@ impl BeamMethod {
             .caller_group(2)
             .kernels(&["init_grid", "decide", "scan", "emit", "advance", "finalize"])
             .build()?;
-        let args_group = |buffer: &wgpu::Buffer| match generate.schema(2) {
-            Some(schema) => schema.bind(device, &[("indirect_args", buffer)]),
-            None => Err(caustics_gpu::GpuError::Invalid(
-                "beams generate.wgsl: no group 2 (indirect_args)".into(),
-            )),
-        };
-        let args = args_group(&b.indirect_args)?;
-        let args_placeholder = args_group(&b.args_placeholder)?;
+        let args = indirect_args_group(device, &generate, &b.indirect_args)?;
+        let args_placeholder = indirect_args_group(device, &generate, &b.args_placeholder)?;
 
         let shader = Shader::new(ctx, "beams rasterize.wgsl", rasterize_source())?;
         let rasterize = RasterPass::builder(ctx, &format!("{name}/rasterize"), &shader, "vs_beam")
@@ -392,19 +391,18 @@ impl BeamMethod {
             1,
             &[
                 ("fu", &b.filter_uniforms),
-                ("raw_surface", &raw_surface.view),
+                ("raw_surface", &b.raw_surface.view),
             ],
         )
         .build()?;
 
-        let bytes = light_gbuffer.bytes() + raw_surface.bytes + atlas.bytes() + b.bytes();
+        let bytes = light_gbuffer.bytes() + atlas.bytes() + b.bytes();
         Ok(Self {
             config: config.clone(),
             light_gbuffer,
             impostor_pass,
             atlas,
             buffers: b,
-            raw_surface,
             generate,
             args,
             args_placeholder,
@@ -480,6 +478,18 @@ fn impostor_atlas(
     )?)
 }
 
+/// Group 2 of the generate pass: the indirect arguments `buffer` (or a placeholder).
+fn indirect_args_group(
+    device: &wgpu::Device,
+    generate: &ComputePass,
+    buffer: &wgpu::Buffer,
+) -> Result<wgpu::BindGroup, MethodError> {
+    let schema = generate.schema(2).ok_or_else(|| {
+        caustics_gpu::GpuError::Invalid("beams generate.wgsl: no group 2 (indirect_args)".into())
+    })?;
+    Ok(schema.bind(device, &[("indirect_args", buffer)])?)
+}
+
 impl CausticsMethod for BeamMethod {
     fn record(&mut self, frame: &mut Frame<'_>) -> Result<(), MethodError> {
         let renderer = frame.renderer;
@@ -515,7 +525,7 @@ impl CausticsMethod for BeamMethod {
             let targets = renderer.targets();
             let attachments = [
                 Some(wgpu::RenderPassColorAttachment {
-                    view: &self.raw_surface.view,
+                    view: &b.raw_surface.view,
                     depth_slice: None,
                     resolve_target: None,
                     ops: wgpu::Operations {
