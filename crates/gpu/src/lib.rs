@@ -21,7 +21,6 @@
 //! # Ok(()) }
 //! ```
 
-pub mod binding;
 mod context;
 mod error;
 pub mod frame;
@@ -47,7 +46,7 @@ pub use gbuffer::{GBuffer, GBufferPass, ShadowMap};
 pub use impostor::{DistanceImpostor, ImpostorAtlas, ImpostorPass};
 pub use light_view::{LightFace, LightProjection, LightView};
 pub use profiling::{FrameMode, FrameSample, PassProfiler, PassSample, PassStatistics};
-pub use renderer::{CountedPipeline, Renderer, RendererOptions, fill_constants, pass_desc};
+pub use renderer::{Renderer, RendererOptions};
 pub use scene_upload::GpuScene;
 pub use scoring::{ScoreAccumulator, ScoredImages, subpixel_offsets};
 pub use wgpu;

@@ -68,33 +68,8 @@ struct LightShadow {
 }
 
 /// Constant values for the `FILL_COUNT` override of frame.wgsl.
-pub fn fill_constants(counting: bool) -> [(&'static str, f64); 1] {
+pub(crate) fn fill_constants(counting: bool) -> [(&'static str, f64); 1] {
     [("FILL_COUNT", if counting { 1.0 } else { 0.0 })]
-}
-
-/// A camera-resolution pipeline built twice: without fill counting for timed frames
-/// and with it for count frames (same shader, `FILL_COUNT` override).
-pub struct CountedPipeline<P> {
-    timed: P,
-    counting: P,
-}
-
-impl<P> CountedPipeline<P> {
-    /// Builds both variants; `build` receives the pipeline constants to use.
-    pub fn new(mut build: impl FnMut(&[(&str, f64)]) -> P) -> Self {
-        let timed = build(&fill_constants(false));
-        let counting = build(&fill_constants(true));
-        Self { timed, counting }
-    }
-
-    /// The variant for this frame.
-    pub fn get(&self, frame: &Frame<'_>) -> &P {
-        if frame.counting() {
-            &self.counting
-        } else {
-            &self.timed
-        }
-    }
 }
 
 /// Base renderer and shared per-scene GPU state.
@@ -502,7 +477,7 @@ impl Renderer {
 }
 
 /// A render-pass descriptor with colour attachments only.
-pub fn pass_desc<'a>(
+pub(crate) fn pass_desc<'a>(
     attachments: &'a [Option<wgpu::RenderPassColorAttachment<'a>>],
 ) -> wgpu::RenderPassDescriptor<'a> {
     wgpu::RenderPassDescriptor {

@@ -20,7 +20,7 @@ use caustics_scene::Scene;
 pub trait CausticsMethod {
     /// Records the method's passes for one frame. In count frames
     /// (`frame.counting()`), camera-resolution pipelines must use their fill-counting
-    /// variant ([`caustics_gpu::CountedPipeline`]).
+    /// variant (a `caustics_gpu::pass::RasterPass` built `.counted()` picks it).
     fn record(&mut self, frame: &mut Frame<'_>) -> Result<(), MethodError>;
 
     /// Counters of the last frame (beams, triangles, photons, overflow, ...). Called
