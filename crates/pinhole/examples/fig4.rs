@@ -44,6 +44,7 @@ fn run_one(scene: &str, config: &str, params: &[String]) -> Result<Row> {
         scene: scene.into(),
         method: "pinhole".into(),
         params: params.to_vec(),
+        param_values: Default::default(),
         frames: 3,
         warmup: 1,
         reference: None,

@@ -53,10 +53,10 @@ pub mod light_map;
 pub mod sampling;
 
 use bytemuck::{Pod, Zeroable};
-use caustics_gpu::binding::entry;
+use caustics_gpu::pass::{ComputePass, RasterPass, Shader};
 use caustics_gpu::textures::{additive_hdr_target, load_attachment};
 use caustics_gpu::wgpu::{self, util::DeviceExt};
-use caustics_gpu::{CountedPipeline, Frame, GpuContext, Renderer, pass_desc, shader};
+use caustics_gpu::{Frame, GpuContext, Renderer, shader};
 use caustics_method::params::{above, closed};
 use caustics_method::{
     Capabilities, CausticsMethod, Counters, Method, MethodError, Unsupported, method_params,
@@ -64,6 +64,7 @@ use caustics_method::{
 use caustics_scene::{Light, Material, Scene, Shape, Vec3};
 use serde::{Deserialize, Serialize};
 
+pub use light_map::LightMap;
 pub use sampling::{PointSample, Strategy};
 
 const TYPES_WGSL: &str = include_str!("types.wgsl");
@@ -315,10 +316,8 @@ impl LightDisc {
 
 /// `pinhole` bound to one scene.
 pub struct Pinhole {
-    prepare_pipeline: wgpu::ComputePipeline,
-    gather_pipeline: CountedPipeline<wgpu::RenderPipeline>,
-    prepare_bind: wgpu::BindGroup,
-    gather_bind: wgpu::BindGroup,
+    prepare: ComputePass,
+    gather: RasterPass,
     counters: wgpu::Buffer,
     sample_count: u32,
     batches: u32,
@@ -343,16 +342,100 @@ fn gpu_samples(samples: &[PointSample], epsilon_scale: f32) -> Vec<GpuSample> {
         .collect()
 }
 
-fn buffer_ty(ty: wgpu::BufferBindingType) -> wgpu::BindingType {
-    wgpu::BindingType::Buffer {
-        ty,
-        has_dynamic_offset: false,
-        min_binding_size: None,
+/// The uniform of both passes: the generator, the batching and the light map's frame.
+fn gpu_params(
+    params: &PinholeParams,
+    generator: u32,
+    mode: u32,
+    sample_count: u32,
+    disc: &LightDisc,
+) -> GpuParams {
+    let (map_u, map_v) = caustics_scene::perpendicular_frame(disc.axis);
+    GpuParams {
+        generator,
+        light_index: 0,
+        sample_count,
+        batch_size: params.samples_per_pass,
+        mode,
+        filtering: params.filtering.code(),
+        _pad: [0; 2],
+        map_center: disc.center.extend(0.0).to_array(),
+        map_axis: disc.axis.extend(disc.radius).to_array(),
+        map_u: map_u.extend(0.0).to_array(),
+        map_v: map_v.extend(0.0).to_array(),
+        light_scale: [disc.radiance_per_power, disc.alpha.cos(), 0.0, 0.0],
+    }
+}
+
+/// The buffers the passes share.
+struct Buffers {
+    params: wgpu::Buffer,
+    samples: wgpu::Buffer,
+    sample_light: wgpu::Buffer,
+    counters: wgpu::Buffer,
+}
+
+impl Buffers {
+    fn new(device: &wgpu::Device, params: &GpuParams, samples: &[GpuSample]) -> Self {
+        let init = |label: &str, contents: &[u8], usage| {
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents,
+                usage,
+            })
+        };
+        let empty = |label: &str, size: u64, usage| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size,
+                usage,
+                mapped_at_creation: false,
+            })
+        };
+        Self {
+            params: init(
+                "pinhole params",
+                bytemuck::bytes_of(params),
+                wgpu::BufferUsages::UNIFORM,
+            ),
+            samples: init(
+                "pinhole samples",
+                bytemuck::cast_slice(samples),
+                wgpu::BufferUsages::STORAGE,
+            ),
+            sample_light: empty(
+                "pinhole sample light",
+                samples.len() as u64 * 16,
+                wgpu::BufferUsages::STORAGE,
+            ),
+            // receiver fragments, pairs (lo, hi), texture fetches (lo, hi): gather.wgsl.
+            counters: empty(
+                "pinhole counters",
+                32,
+                wgpu::BufferUsages::STORAGE
+                    | wgpu::BufferUsages::COPY_DST
+                    | wgpu::BufferUsages::COPY_SRC,
+            ),
+        }
+    }
+
+    fn bytes(&self) -> u64 {
+        [
+            &self.params,
+            &self.samples,
+            &self.sample_light,
+            &self.counters,
+        ]
+        .iter()
+        .map(|b| b.size())
+        .sum()
     }
 }
 
 impl Pinhole {
-    /// Samples the scene's generator, builds the light's cube map and the two passes.
+    /// Samples the scene's generator, builds the light's map and the paper's two
+    /// passes: the light seen from each sample, then the gather over all samples per
+    /// receiver pixel.
     pub fn new(
         ctx: &GpuContext,
         renderer: &Renderer,
@@ -383,278 +466,63 @@ impl Pinhole {
             Material::Dielectric { .. } => 1,
             _ => 0,
         };
-        let res = ctx.checked("pinhole setup", || {
-            Self::build(
-                ctx,
-                renderer,
-                params,
-                generator as u32,
-                mode,
-                &samples,
-                &disc,
-            )
-        })?;
-        Ok(res)
-    }
-
-    #[allow(clippy::too_many_arguments)]
-    fn build(
-        ctx: &GpuContext,
-        renderer: &Renderer,
-        params: &PinholeParams,
-        generator: u32,
-        mode: u32,
-        samples: &[PointSample],
-        disc: &LightDisc,
-    ) -> Self {
-        let device = &ctx.device;
         let sample_count = samples.len() as u32;
-        let (map_u, map_v) = caustics_scene::perpendicular_frame(disc.axis);
-        let gpu_params = GpuParams {
-            generator,
-            light_index: 0,
-            sample_count,
-            batch_size: params.samples_per_pass,
-            mode,
-            filtering: params.filtering.code(),
-            _pad: [0; 2],
-            map_center: disc.center.extend(0.0).to_array(),
-            map_axis: disc.axis.extend(disc.radius).to_array(),
-            map_u: map_u.extend(0.0).to_array(),
-            map_v: map_v.extend(0.0).to_array(),
-            light_scale: [disc.radiance_per_power, disc.alpha.cos(), 0.0, 0.0],
-        };
-        let init = |label: &str, contents: &[u8], usage| {
-            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents,
-                usage,
-            })
-        };
-        let params_buffer = init(
-            "pinhole params",
-            bytemuck::bytes_of(&gpu_params),
-            wgpu::BufferUsages::UNIFORM,
-        );
-        let samples_buffer = init(
-            "pinhole samples",
-            bytemuck::cast_slice(&gpu_samples(samples, params.epsilon_scale as f32)),
-            wgpu::BufferUsages::STORAGE,
-        );
-        let sample_light = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("pinhole sample light"),
-            size: sample_count as u64 * 16,
-            usage: wgpu::BufferUsages::STORAGE,
-            mapped_at_creation: false,
-        });
-        let counters = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("pinhole counters"),
-            size: 32,
-            usage: wgpu::BufferUsages::STORAGE
-                | wgpu::BufferUsages::COPY_DST
-                | wgpu::BufferUsages::COPY_SRC,
-            mapped_at_creation: false,
-        });
-
-        // The light's map (the +Z face of its cube map) with its mip chain (light_map.rs).
-        let size = params.cube_size;
-        let levels = light_map::coverage_mips(size, disc.alpha);
-        let texture = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("pinhole light map"),
-            size: wgpu::Extent3d {
-                width: size,
-                height: size,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: levels.len() as u32,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: wgpu::TextureFormat::R16Float,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-            view_formats: &[],
-        });
-        let mut texture_bytes = 0u64;
-        for (level, data) in levels.iter().enumerate() {
-            let w = (size >> level).max(1);
-            let bytes: Vec<u8> = data
-                .iter()
-                .flat_map(|&v| light_map::f16_bits(v).to_le_bytes())
-                .collect();
-            texture_bytes += bytes.len() as u64;
-            ctx.queue.write_texture(
-                wgpu::TexelCopyTextureInfo {
-                    texture: &texture,
-                    mip_level: level as u32,
-                    origin: wgpu::Origin3d::ZERO,
-                    aspect: wgpu::TextureAspect::All,
-                },
-                &bytes,
-                wgpu::TexelCopyBufferLayout {
-                    offset: 0,
-                    bytes_per_row: Some(2 * w),
-                    rows_per_image: Some(w),
-                },
-                wgpu::Extent3d {
-                    width: w,
-                    height: w,
-                    depth_or_array_layers: 1,
-                },
+        let gpu_params = gpu_params(params, generator as u32, mode, sample_count, &disc);
+        let (buffers, map) = ctx.checked("pinhole setup", || {
+            let buffers = Buffers::new(
+                &ctx.device,
+                &gpu_params,
+                &gpu_samples(&samples, params.epsilon_scale as f32),
             );
-        }
-        let cube_view = texture.create_view(&wgpu::TextureViewDescriptor::default());
-        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
-            label: Some("pinhole light map"),
-            mag_filter: wgpu::FilterMode::Linear,
-            min_filter: wgpu::FilterMode::Linear,
-            mipmap_filter: wgpu::MipmapFilterMode::Linear,
-            ..Default::default()
-        });
+            // The light's map (the +Z face of its cube map) with its mip chain.
+            (buffers, LightMap::new(ctx, params.cube_size, disc.alpha))
+        })?;
 
-        let cs = wgpu::ShaderStages::COMPUTE;
-        let fs = wgpu::ShaderStages::FRAGMENT;
-        let storage = |read_only| buffer_ty(wgpu::BufferBindingType::Storage { read_only });
-        let uniform = buffer_ty(wgpu::BufferBindingType::Uniform);
-        let prepare_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("pinhole prepare"),
-            entries: &[
-                entry(0, cs, uniform),
-                entry(1, cs, storage(true)),
-                entry(2, cs, storage(false)),
-            ],
-        });
-        let gather_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("pinhole gather"),
-            entries: &[
-                entry(0, fs, uniform),
-                entry(1, fs, storage(true)),
-                entry(2, fs, storage(true)),
-                entry(3, fs, storage(false)),
-                entry(
-                    4,
-                    fs,
-                    wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Float { filterable: true },
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                        multisampled: false,
-                    },
-                ),
-                entry(
-                    5,
-                    fs,
-                    wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
-                ),
-            ],
-        });
-        let prepare_bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("pinhole prepare"),
-            layout: &prepare_layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: params_buffer.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: samples_buffer.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 2,
-                    resource: sample_light.as_entire_binding(),
-                },
-            ],
-        });
-        let gather_bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("pinhole gather"),
-            layout: &gather_layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: params_buffer.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: samples_buffer.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 2,
-                    resource: sample_light.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 3,
-                    resource: counters.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 4,
-                    resource: wgpu::BindingResource::TextureView(&cube_view),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 5,
-                    resource: wgpu::BindingResource::Sampler(&sampler),
-                },
-            ],
-        });
-        let pipeline_layout = |label: &str, own: &wgpu::BindGroupLayout| {
-            device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some(label),
-                bind_group_layouts: &[Some(renderer.frame_layout()), Some(own)],
-                immediate_size: 0,
-            })
-        };
-        let prepare_module =
-            shader::module(device, "pinhole prepare.wgsl", pass_source(PREPARE_WGSL));
-        let prepare_pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("pinhole prepare"),
-            layout: Some(&pipeline_layout("pinhole prepare", &prepare_layout)),
-            module: &prepare_module,
-            entry_point: Some("prepare_samples"),
-            compilation_options: Default::default(),
-            cache: None,
-        });
-        let gather_module = shader::module(device, "pinhole gather.wgsl", pass_source(GATHER_WGSL));
-        let gather_layout_p = pipeline_layout("pinhole gather", &gather_layout);
-        let gather_pipeline = CountedPipeline::new(|constants| {
-            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some("pinhole gather"),
-                layout: Some(&gather_layout_p),
-                vertex: wgpu::VertexState {
-                    module: &gather_module,
-                    entry_point: Some("vs_gather"),
-                    compilation_options: Default::default(),
-                    buffers: &[],
-                },
-                primitive: Default::default(),
-                depth_stencil: None,
-                multisample: Default::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module: &gather_module,
-                    entry_point: Some("fs_gather"),
-                    compilation_options: wgpu::PipelineCompilationOptions {
-                        constants,
-                        ..Default::default()
-                    },
-                    targets: &[Some(additive_hdr_target())],
-                }),
-                multiview_mask: None,
-                cache: None,
-            })
-        });
-        let cam = &renderer.scene().scene.camera;
-        let bytes = params_buffer.size()
-            + samples_buffer.size()
-            + sample_light.size()
-            + counters.size()
-            + texture_bytes;
-        Self {
-            prepare_pipeline,
-            gather_pipeline,
-            prepare_bind,
-            gather_bind,
-            counters,
+        // Pass 1: the light's radiance seen from each sample (mirrors).
+        let shader = Shader::new(ctx, "pinhole prepare.wgsl", pass_source(PREPARE_WGSL))?;
+        let prepare = ComputePass::builder(ctx, "pinhole/prepare_samples", &shader)
+            .frame(renderer)
+            .bind(
+                1,
+                &[
+                    ("params", &buffers.params),
+                    ("samples", &buffers.samples),
+                    ("sample_light", &buffers.sample_light),
+                ],
+            )
+            .kernels(&["prepare_samples"])
+            .build()?;
+
+        // Pass 2: every receiver pixel gathers the light through every sample, one
+        // full-screen instance per batch of samples, added into the surface target.
+        let shader = Shader::new(ctx, "pinhole gather.wgsl", pass_source(GATHER_WGSL))?;
+        let gather = RasterPass::builder(ctx, "pinhole/gather", &shader, "vs_gather")
+            .frame(renderer)
+            .bind(
+                1,
+                &[
+                    ("params", &buffers.params),
+                    ("samples", &buffers.samples),
+                    ("sample_light", &buffers.sample_light),
+                    ("counters", &buffers.counters),
+                    ("light_map", &map.view),
+                    ("light_sampler", &map.sampler),
+                ],
+            )
+            .fragment("fs_gather", &[Some(additive_hdr_target())])
+            .counted()
+            .build()?;
+
+        let cam = &scene.camera;
+        Ok(Self {
+            prepare,
+            gather,
+            bytes: buffers.bytes() + map.bytes,
+            counters: buffers.counters,
             sample_count,
             batches: sample_count.div_ceil(params.samples_per_pass),
             receiver_pixels_hint: cam.width as u64 * cam.height as u64,
-            bytes,
-        }
+        })
     }
 }
 
@@ -662,19 +530,11 @@ impl CausticsMethod for Pinhole {
     fn record(&mut self, frame: &mut Frame<'_>) -> Result<(), MethodError> {
         let renderer = frame.renderer;
         frame.encoder.clear_buffer(&self.counters, 0, None);
-        {
-            let mut pass = frame.compute_pass("pinhole/prepare_samples")?;
-            pass.set_pipeline(&self.prepare_pipeline);
-            pass.set_bind_group(0, renderer.frame_bind_group(), &[]);
-            pass.set_bind_group(1, &self.prepare_bind, &[]);
-            pass.dispatch_workgroups(self.sample_count.div_ceil(64), 1, 1);
-        }
-        let pipeline = self.gather_pipeline.get(frame);
+        self.prepare
+            .begin(frame)?
+            .dispatch("prepare_samples", [self.sample_count.div_ceil(64), 1, 1])?;
         let attachments = [load_attachment(&renderer.targets().surface.view)];
-        let mut pass = frame.render_pass("pinhole/gather", pass_desc(&attachments))?;
-        pass.set_pipeline(pipeline);
-        pass.set_bind_group(0, renderer.frame_bind_group(), &[]);
-        pass.set_bind_group(1, &self.gather_bind, &[]);
+        let mut pass = self.gather.begin(frame, &attachments, None)?;
         pass.draw(0..3, 0..self.batches);
         Ok(())
     }
@@ -711,6 +571,51 @@ mod tests {
     fn shaders_validate() -> Result<(), String> {
         shader::validate_wgsl("prepare.wgsl", &pass_source(PREPARE_WGSL))?;
         shader::validate_wgsl("gather.wgsl", &pass_source(GATHER_WGSL))
+    }
+
+    #[test]
+    fn gpu_structs_match_their_wgsl() {
+        let src = pass_source(GATHER_WGSL);
+        caustics_gpu::assert_wgsl_layout!(src, GpuSample as "Sample" { pos, normal, t1, t2, extra });
+        caustics_gpu::assert_wgsl_layout!(
+            src,
+            GpuParams as "Params" {
+                generator,
+                light_index,
+                sample_count,
+                batch_size,
+                mode,
+                filtering,
+                map_center,
+                map_axis,
+                map_u,
+                map_v,
+                light_scale
+            }
+        );
+    }
+
+    #[test]
+    fn the_gather_samples_its_light_map_filtered() -> Result<(), String> {
+        // The reflection must bind the light map as filterable (it is read through a
+        // trilinear sampler), or the gather's pipeline would not validate.
+        let r = caustics_gpu::pass::Reflection::of("gather.wgsl", &pass_source(GATHER_WGSL))?;
+        let ty = |name: &str| r.group(1).iter().find(|b| b.name == name).map(|b| b.ty);
+        assert_eq!(
+            ty("light_map"),
+            Some(wgpu::BindingType::Texture {
+                sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                view_dimension: wgpu::TextureViewDimension::D2,
+                multisampled: false,
+            })
+        );
+        assert_eq!(
+            ty("light_sampler"),
+            Some(wgpu::BindingType::Sampler(
+                wgpu::SamplerBindingType::Filtering
+            ))
+        );
+        Ok(())
     }
 
     #[test]

@@ -17,6 +17,81 @@
 //! The bench's lights do not move, so the map is built once per scene; the paper
 //! re-renders it per frame, which costs little next to the gather.
 
+use caustics_gpu::GpuContext;
+use caustics_gpu::wgpu;
+
+/// The map on the GPU: a `size`² R16Float texture with its mip chain, and the
+/// trilinear sampler the gather's footprint filter reads it with.
+pub struct LightMap {
+    /// View of every level.
+    pub view: wgpu::TextureView,
+    /// Linear min/mag/mip filtering.
+    pub sampler: wgpu::Sampler,
+    /// Bytes of the texture.
+    pub bytes: u64,
+}
+
+impl LightMap {
+    /// Builds the coverage of a cone of half angle `alpha` ([`coverage_mips`]) and
+    /// uploads it.
+    pub fn new(ctx: &GpuContext, size: u32, alpha: f32) -> Self {
+        let levels = coverage_mips(size, alpha);
+        let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("pinhole light map"),
+            size: wgpu::Extent3d {
+                width: size,
+                height: size,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: levels.len() as u32,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::R16Float,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+            view_formats: &[],
+        });
+        let mut bytes = 0u64;
+        for (level, data) in levels.iter().enumerate() {
+            let w = (size >> level).max(1);
+            let texels: Vec<u8> = data
+                .iter()
+                .flat_map(|&v| f16_bits(v).to_le_bytes())
+                .collect();
+            bytes += texels.len() as u64;
+            ctx.queue.write_texture(
+                wgpu::TexelCopyTextureInfo {
+                    texture: &texture,
+                    mip_level: level as u32,
+                    origin: wgpu::Origin3d::ZERO,
+                    aspect: wgpu::TextureAspect::All,
+                },
+                &texels,
+                wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(2 * w),
+                    rows_per_image: Some(w),
+                },
+                wgpu::Extent3d {
+                    width: w,
+                    height: w,
+                    depth_or_array_layers: 1,
+                },
+            );
+        }
+        Self {
+            view: texture.create_view(&wgpu::TextureViewDescriptor::default()),
+            sampler: ctx.device.create_sampler(&wgpu::SamplerDescriptor {
+                label: Some("pinhole light map"),
+                mag_filter: wgpu::FilterMode::Linear,
+                min_filter: wgpu::FilterMode::Linear,
+                mipmap_filter: wgpu::MipmapFilterMode::Linear,
+                ..Default::default()
+            }),
+            bytes,
+        }
+    }
+}
+
 /// Coverage of each texel of a `size`² map of the +Z face by the cone of half angle
 /// `alpha` (< 45°) around +Z, rows top first (t = −1 first); then each smaller mip
 /// level down to 1×1.

@@ -24,10 +24,10 @@
 mod sources;
 
 use bytemuck::{Pod, Zeroable};
-use caustics_gpu::binding::{buffers_bind_group, storage_entry, uniform_entry};
+use caustics_gpu::pass::{ComputePass, RasterPass, Shader};
 use caustics_gpu::textures::{additive_hdr_target, load_attachment};
 use caustics_gpu::wgpu::{self, util::DeviceExt};
-use caustics_gpu::{CountedPipeline, Frame, GpuContext, Renderer, pass_desc, shader};
+use caustics_gpu::{Frame, GpuContext, Renderer, shader};
 use caustics_method::params::{above, closed};
 use caustics_method::{
     Capabilities, CausticsMethod, Counters, Method, MethodError, Unsupported, method_params,
@@ -176,6 +176,7 @@ fn check_scene(scene: &Scene) -> Result<(), Unsupported> {
     Ok(())
 }
 
+/// Matches `TraceParams` in types.wgsl.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 struct TraceParams {
@@ -185,6 +186,7 @@ struct TraceParams {
     triangle_count: u32,
 }
 
+/// Matches `SplatParams` in splat.wgsl.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 struct SplatParams {
@@ -197,12 +199,9 @@ const COUNTERS_INIT: [u32; 4] = [0; 4];
 
 /// `wavefront` bound to one scene.
 pub struct Wavefront {
-    trace_pipeline: wgpu::ComputePipeline,
-    classify_pipeline: wgpu::ComputePipeline,
-    splat_pipeline: CountedPipeline<wgpu::RenderPipeline>,
-    trace_bind: wgpu::BindGroup,
-    classify_bind: wgpu::BindGroup,
-    splat_bind: wgpu::BindGroup,
+    trace: ComputePass,
+    classify: ComputePass,
+    splat: RasterPass,
     counters: wgpu::Buffer,
     counters_init: wgpu::Buffer,
     source_count: u32,
@@ -210,8 +209,96 @@ pub struct Wavefront {
     bytes: u64,
 }
 
+/// The buffers the three passes share.
+struct Buffers {
+    trace_params: wgpu::Buffer,
+    splat_params: wgpu::Buffer,
+    sources: wgpu::Buffer,
+    triangles: wgpu::Buffer,
+    traced: wgpu::Buffer,
+    keep: wgpu::Buffer,
+    counters: wgpu::Buffer,
+    counters_init: wgpu::Buffer,
+}
+
+impl Buffers {
+    fn new(
+        device: &wgpu::Device,
+        mesh: &WavefrontMesh,
+        trace: &TraceParams,
+        splat: &SplatParams,
+    ) -> Self {
+        let init = |label: &str, contents: &[u8], usage| {
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents,
+                usage,
+            })
+        };
+        let storage = |label: &str, size: u64| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size,
+                usage: wgpu::BufferUsages::STORAGE,
+                mapped_at_creation: false,
+            })
+        };
+        let uniform = wgpu::BufferUsages::UNIFORM;
+        Self {
+            trace_params: init("wavefront trace params", bytemuck::bytes_of(trace), uniform),
+            splat_params: init("wavefront splat params", bytemuck::bytes_of(splat), uniform),
+            sources: init(
+                "wavefront sources",
+                bytemuck::cast_slice(&mesh.sources),
+                wgpu::BufferUsages::STORAGE,
+            ),
+            triangles: init(
+                "wavefront triangles",
+                bytemuck::cast_slice(&mesh.triangles),
+                wgpu::BufferUsages::STORAGE,
+            ),
+            // One `Traced` (64 bytes) per source, one flag per triangle.
+            traced: storage("wavefront traced vertices", trace.source_count as u64 * 64),
+            keep: storage(
+                "wavefront keep flags",
+                trace.triangle_count.max(1) as u64 * 4,
+            ),
+            counters: init(
+                "wavefront counters",
+                bytemuck::cast_slice(&COUNTERS_INIT),
+                wgpu::BufferUsages::STORAGE
+                    | wgpu::BufferUsages::COPY_DST
+                    | wgpu::BufferUsages::COPY_SRC,
+            ),
+            counters_init: init(
+                "wavefront counters reset",
+                bytemuck::cast_slice(&COUNTERS_INIT),
+                wgpu::BufferUsages::COPY_SRC,
+            ),
+        }
+    }
+
+    fn bytes(&self) -> u64 {
+        [
+            &self.trace_params,
+            &self.splat_params,
+            &self.sources,
+            &self.triangles,
+            &self.traced,
+            &self.keep,
+            &self.counters,
+            &self.counters_init,
+        ]
+        .iter()
+        .map(|b| b.size())
+        .sum()
+    }
+}
+
 impl Wavefront {
-    /// Builds the wavefront of the scene's caustic generator and the three passes.
+    /// Builds the wavefront of the scene's caustic generator and Wallace's three
+    /// passes: trace the rays, flag the triangles that stay on one receiver, draw them
+    /// with the area ratio as brightness.
     pub fn new(
         ctx: &GpuContext,
         renderer: &Renderer,
@@ -225,11 +312,10 @@ impl Wavefront {
             reason,
         };
         let generator = caustic_generator(scene).map_err(unsupported)?;
-        let light = &scene.lights[0];
         let mesh = sources::for_shape(
             &scene.objects[generator].shape,
             &gpu_scene.meshes[generator],
-            light,
+            &scene.lights[0],
             params.grid,
         )
         .ok_or_else(|| {
@@ -237,218 +323,80 @@ impl Wavefront {
                 "cannot build a wavefront for this refractor and light".into(),
             ))
         })?;
-        let res = ctx.checked("wavefront setup", || {
-            Self::build(ctx, renderer, params, generator as u32, &mesh)
+        let trace_params = TraceParams {
+            specular_object: generator as u32,
+            light_index: 0,
+            source_count: mesh.sources.len() as u32,
+            triangle_count: (mesh.triangles.len() / 3) as u32,
+        };
+        let splat_params = SplatParams {
+            tolerance: params.tolerance as f32,
+            _pad: [0.0; 3],
+        };
+        let b = ctx.checked("wavefront setup", || {
+            Buffers::new(&ctx.device, &mesh, &trace_params, &splat_params)
         })?;
-        Ok(res)
-    }
 
-    fn build(
-        ctx: &GpuContext,
-        renderer: &Renderer,
-        params: &WavefrontParams,
-        generator: u32,
-        mesh: &WavefrontMesh,
-    ) -> Self {
-        let device = &ctx.device;
-        let source_count = mesh.sources.len() as u32;
-        let triangle_count = (mesh.triangles.len() / 3) as u32;
-        let init = |label: &str, contents: &[u8], usage| {
-            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents,
-                usage,
-            })
-        };
-        let storage_usage = wgpu::BufferUsages::STORAGE;
-        let trace_params = init(
-            "wavefront trace params",
-            bytemuck::bytes_of(&TraceParams {
-                specular_object: generator,
-                light_index: 0,
-                source_count,
-                triangle_count,
-            }),
-            wgpu::BufferUsages::UNIFORM,
-        );
-        let splat_params = init(
-            "wavefront splat params",
-            bytemuck::bytes_of(&SplatParams {
-                tolerance: params.tolerance as f32,
-                _pad: [0.0; 3],
-            }),
-            wgpu::BufferUsages::UNIFORM,
-        );
-        let sources = init(
-            "wavefront sources",
-            bytemuck::cast_slice(&mesh.sources),
-            storage_usage,
-        );
-        let triangles = init(
-            "wavefront triangles",
-            bytemuck::cast_slice(&mesh.triangles),
-            storage_usage,
-        );
-        let traced = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("wavefront traced vertices"),
-            size: source_count as u64 * 64,
-            usage: storage_usage,
-            mapped_at_creation: false,
-        });
-        let keep = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("wavefront keep flags"),
-            size: triangle_count.max(1) as u64 * 4,
-            usage: storage_usage,
-            mapped_at_creation: false,
-        });
-        let counters = init(
-            "wavefront counters",
-            bytemuck::cast_slice(&COUNTERS_INIT),
-            storage_usage | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
-        );
-        let counters_init = init(
-            "wavefront counters reset",
-            bytemuck::cast_slice(&COUNTERS_INIT),
-            wgpu::BufferUsages::COPY_SRC,
-        );
+        // Pass 1: one light ray per wavefront vertex, through the generator to a receiver.
+        let shader = Shader::new(ctx, "wavefront trace.wgsl", pass_source(TRACE_WGSL))?;
+        let trace = ComputePass::builder(ctx, "wavefront/trace_vertices", &shader)
+            .frame(renderer)
+            .bind(
+                1,
+                &[
+                    ("tp", &b.trace_params),
+                    ("sources", &b.sources),
+                    ("traced", &b.traced),
+                ],
+            )
+            .kernels(&["trace_vertices"])
+            .build()?;
 
-        let cs = wgpu::ShaderStages::COMPUTE;
-        let trace_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("wavefront trace"),
-            entries: &[
-                uniform_entry(0, cs),
-                storage_entry(1, true, cs),
-                storage_entry(2, false, cs),
-            ],
-        });
-        let classify_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("wavefront classify"),
-            entries: &[
-                uniform_entry(0, cs),
-                storage_entry(1, true, cs),
-                storage_entry(2, true, cs),
-                storage_entry(3, false, cs),
-                storage_entry(4, false, cs),
-            ],
-        });
-        let vf = wgpu::ShaderStages::VERTEX_FRAGMENT;
-        let splat_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("wavefront splat"),
-            entries: &[
-                uniform_entry(0, vf),
-                storage_entry(1, true, vf),
-                storage_entry(2, true, vf),
-                storage_entry(3, true, vf),
-            ],
-        });
-        let trace_bind = buffers_bind_group(
-            device,
-            "wavefront trace",
-            &trace_layout,
-            &[&trace_params, &sources, &traced],
-        );
-        let classify_bind = buffers_bind_group(
-            device,
-            "wavefront classify",
-            &classify_layout,
-            &[&trace_params, &traced, &triangles, &keep, &counters],
-        );
-        let splat_bind = buffers_bind_group(
-            device,
-            "wavefront splat",
-            &splat_layout,
-            &[&splat_params, &traced, &triangles, &keep],
-        );
+        // Pass 2: keep the triangles whose vertices land on one side of one receiver.
+        let shader = Shader::new(ctx, "wavefront classify.wgsl", pass_source(CLASSIFY_WGSL))?;
+        let classify = ComputePass::builder(ctx, "wavefront/classify_triangles", &shader)
+            .frame(renderer)
+            .bind(
+                1,
+                &[
+                    ("tp", &b.trace_params),
+                    ("traced", &b.traced),
+                    ("triangles", &b.triangles),
+                    ("keep", &b.keep),
+                    ("counters", &b.counters),
+                ],
+            )
+            .kernels(&["classify_triangles"])
+            .build()?;
 
-        let pipeline_layout = |label: &str, own: &wgpu::BindGroupLayout| {
-            device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some(label),
-                bind_group_layouts: &[Some(renderer.frame_layout()), Some(own)],
-                immediate_size: 0,
-            })
-        };
-        let compute = |label: &str, src: &str, entry: &str, own: &wgpu::BindGroupLayout| {
-            let module = shader::module(device, label, pass_source(src));
-            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(label),
-                layout: Some(&pipeline_layout(label, own)),
-                module: &module,
-                entry_point: Some(entry),
-                compilation_options: Default::default(),
-                cache: None,
-            })
-        };
-        let trace_pipeline = compute(
-            "wavefront trace.wgsl",
-            TRACE_WGSL,
-            "trace_vertices",
-            &trace_layout,
-        );
-        let classify_pipeline = compute(
-            "wavefront classify.wgsl",
-            CLASSIFY_WGSL,
-            "classify_triangles",
-            &classify_layout,
-        );
+        // Pass 3: the kept triangles drawn from the camera, brightness = old/new area.
+        // Folded triangles face away: both windings count (the builder culls nothing).
+        let shader = Shader::new(ctx, "wavefront splat.wgsl", pass_source(SPLAT_WGSL))?;
+        let splat = RasterPass::builder(ctx, "wavefront/splat", &shader, "vs_splat")
+            .frame(renderer)
+            .bind(
+                1,
+                &[
+                    ("sp", &b.splat_params),
+                    ("traced", &b.traced),
+                    ("triangles", &b.triangles),
+                    ("keep", &b.keep),
+                ],
+            )
+            .fragment("fs_splat", &[Some(additive_hdr_target())])
+            .counted()
+            .build()?;
 
-        let splat_module = shader::module(device, "wavefront splat.wgsl", pass_source(SPLAT_WGSL));
-        let splat_layout_p = pipeline_layout("wavefront splat", &splat_layout);
-        let splat_pipeline = CountedPipeline::new(|constants| {
-            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some("wavefront splat"),
-                layout: Some(&splat_layout_p),
-                vertex: wgpu::VertexState {
-                    module: &splat_module,
-                    entry_point: Some("vs_splat"),
-                    compilation_options: Default::default(),
-                    buffers: &[],
-                },
-                // Folded triangles face away: both windings count.
-                primitive: wgpu::PrimitiveState {
-                    cull_mode: None,
-                    ..Default::default()
-                },
-                depth_stencil: None,
-                multisample: Default::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module: &splat_module,
-                    entry_point: Some("fs_splat"),
-                    compilation_options: wgpu::PipelineCompilationOptions {
-                        constants,
-                        ..Default::default()
-                    },
-                    targets: &[Some(additive_hdr_target())],
-                }),
-                multiview_mask: None,
-                cache: None,
-            })
-        });
-        let bytes = [
-            &trace_params,
-            &splat_params,
-            &sources,
-            &triangles,
-            &traced,
-            &keep,
-            &counters,
-            &counters_init,
-        ]
-        .iter()
-        .map(|b| b.size())
-        .sum();
-        Self {
-            trace_pipeline,
-            classify_pipeline,
-            splat_pipeline,
-            trace_bind,
-            classify_bind,
-            splat_bind,
-            counters,
-            counters_init,
-            source_count,
-            triangle_count,
-            bytes,
-        }
+        Ok(Self {
+            trace,
+            classify,
+            splat,
+            bytes: b.bytes(),
+            counters: b.counters,
+            counters_init: b.counters_init,
+            source_count: trace_params.source_count,
+            triangle_count: trace_params.triangle_count,
+        })
     }
 }
 
@@ -462,26 +410,15 @@ impl CausticsMethod for Wavefront {
             0,
             self.counters.size(),
         );
-        {
-            let mut pass = frame.compute_pass("wavefront/trace_vertices")?;
-            pass.set_pipeline(&self.trace_pipeline);
-            pass.set_bind_group(0, renderer.frame_bind_group(), &[]);
-            pass.set_bind_group(1, &self.trace_bind, &[]);
-            pass.dispatch_workgroups(self.source_count.div_ceil(64), 1, 1);
-        }
-        {
-            let mut pass = frame.compute_pass("wavefront/classify_triangles")?;
-            pass.set_pipeline(&self.classify_pipeline);
-            pass.set_bind_group(0, renderer.frame_bind_group(), &[]);
-            pass.set_bind_group(1, &self.classify_bind, &[]);
-            pass.dispatch_workgroups(self.triangle_count.div_ceil(64), 1, 1);
-        }
-        let pipeline = self.splat_pipeline.get(frame);
+        self.trace
+            .begin(frame)?
+            .dispatch("trace_vertices", [self.source_count.div_ceil(64), 1, 1])?;
+        self.classify.begin(frame)?.dispatch(
+            "classify_triangles",
+            [self.triangle_count.div_ceil(64), 1, 1],
+        )?;
         let attachments = [load_attachment(&renderer.targets().surface.view)];
-        let mut pass = frame.render_pass("wavefront/splat", pass_desc(&attachments))?;
-        pass.set_pipeline(pipeline);
-        pass.set_bind_group(0, renderer.frame_bind_group(), &[]);
-        pass.set_bind_group(1, &self.splat_bind, &[]);
+        let mut pass = self.splat.begin(frame, &attachments, None)?;
         pass.draw(0..3 * self.triangle_count, 0..1);
         Ok(())
     }
@@ -518,6 +455,27 @@ mod tests {
         shader::validate_wgsl("trace.wgsl", &pass_source(TRACE_WGSL))?;
         shader::validate_wgsl("classify.wgsl", &pass_source(CLASSIFY_WGSL))?;
         shader::validate_wgsl("splat.wgsl", &pass_source(SPLAT_WGSL))
+    }
+
+    #[test]
+    fn gpu_structs_match_their_wgsl() {
+        caustics_gpu::assert_wgsl_layout!(
+            pass_source(TRACE_WGSL),
+            Source {
+                origin,
+                dir_or_normal
+            }
+        );
+        caustics_gpu::assert_wgsl_layout!(
+            pass_source(TRACE_WGSL),
+            TraceParams {
+                specular_object,
+                light_index,
+                source_count,
+                triangle_count
+            }
+        );
+        caustics_gpu::assert_wgsl_layout!(pass_source(SPLAT_WGSL), SplatParams { tolerance });
     }
 
     #[test]
