@@ -153,6 +153,7 @@ fn run_at(
         scene: scene.into(),
         method: method.into(),
         params: params.to_vec(),
+        param_values: Default::default(),
         frames: 5,
         warmup: 2,
         reference: None,

@@ -264,11 +264,13 @@ fn splatting_conserves_the_photon_flux_for_every_kernel() {
     let (ctx, renderer) = renderer(&path);
     for kernel_px in [1u32, 4, 16] {
         let params = SplattingParams {
-            resolution: 48,
-            cube_size: 256,
-            distance_map_size: 128,
+            hits: photon_hits::PhotonHitConfig {
+                resolution: 48,
+                cube_size: 256,
+                distance_map_size: 128,
+                ..Default::default()
+            },
             kernel_px,
-            ..Default::default()
         };
         let mut m = Splatting::new(&ctx, &renderer, &params).expect("method");
         one_frame(&ctx, &renderer, &mut m);

@@ -37,7 +37,7 @@ use bytemuck::{Pod, Zeroable};
 use caustics_gpu::pass::{RasterPass, Shader};
 use caustics_gpu::textures::additive_hdr_target;
 use caustics_gpu::wgpu::{self, util::DeviceExt};
-use caustics_gpu::{Frame, GpuContext, Renderer, shader};
+use caustics_gpu::{Frame, GpuContext, Renderer};
 use caustics_method::params::closed;
 use caustics_method::{
     Capabilities, CausticsMethod, Counters, Method, MethodError, Unsupported, method_params,
@@ -143,7 +143,7 @@ impl Splatting {
                 1,
                 &[
                     ("cm", map.uniform()),
-                    ("sp", &splat_uniform),
+                    ("su", &splat_uniform),
                     ("hits", &hits.hits),
                 ],
             )
@@ -202,6 +202,7 @@ fn splat_source() -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use caustics_gpu::shader;
     use caustics_method::params::parse;
 
     #[test]
