@@ -171,6 +171,7 @@ fn run_row(
         scene: scene.display().to_string(),
         method: method.into(),
         params: params.iter().map(|p| p.to_string()).collect(),
+        param_values: Default::default(),
         frames: s.frames,
         warmup: 2,
         reference: None,

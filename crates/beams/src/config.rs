@@ -36,15 +36,15 @@ method_params! {
         light_resolution: u32 = 1024 => closed(16.0, 4096.0);
         /// distance impostor resolution (texels per cube-face side)
         impostor_resolution: u32 = 256 => closed(16.0, 2048.0);
-        /// capacity of the beam and candidate buffers; excess is counted as overflow and warned about (at most 2^22: 1.1 GB of beams)
+        /// capacity of the beam and candidate buffers; excess is counted as overflow and warned about (bound: 2^22 beams are 1.1 GB)
         max_beams: u32 = 1 << 16 => closed(1.0, 4194304.0);
         /// also trace the Fresnel-reflected beams of dielectrics
         reflections: bool = true;
-        /// sigma (px) of the low-pass filter on the surface caustic (Sect. 7), 0 = off (at most 16: a (4 sigma + 1)^2 gather per pixel)
+        /// sigma (px) of the low-pass filter on the surface caustic (Sect. 7), 0 = off (bound: a (4 sigma + 1)^2 gather per pixel)
         surface_filter_px: f64 = 1.0 => closed(0.0, 16.0);
-        /// soft-particle fade of volume caustics near surfaces (m), 0 = off (segments are clipped exactly; at most 64 m, beyond any scene)
+        /// soft-particle fade of volume caustics near surfaces (m), 0 = off (segments are clipped exactly; bound: longer than any scene)
         soft_depth_m: f64 = 0.0 => closed(0.0, 64.0);
-        /// A(y) is clamped to >= A(0)/max_focus (a point-sampled focus is singular; 1 = no focusing, at most 1e6)
+        /// A(y) is clamped to >= A(0)/max_focus (a point-sampled focus is singular; 1 = no focusing; bound: a millionfold concentration)
         max_focus: f64 = 1000.0 => closed(1.0, 1e6);
     }
     check = max_beams_hold_the_base_grid;
@@ -68,23 +68,23 @@ method_params! {
     /// Refinement of the projected grid by the split oracle (Sect. 4.2): the parameters
     /// of `adaptive-beams` beyond [`BeamParams`] (defaults: the paper's Sect. 8).
     pub struct Refinement {
-        /// refinement levels of the projected grid (0..=4)
+        /// refinement levels of the projected grid (bound: the counters of levels 0..=4)
         levels: u32 = 3 => closed(0.0, MAX_LEVELS as f64);
         /// split at silhouettes and surface discontinuities (Sect. 4.2)
         split_discontinuity: bool = true;
-        /// corner normals differing by more than this split (degrees, at most 180)
+        /// corner normals differing by more than this split (degrees)
         split_normal_deg: f64 = 30.0 => above(0.0, 180.0);
-        /// corner depths changing faster than this (|Δdepth|/lateral) split (at most 1e3: 89.9°)
+        /// corner depths changing faster than this (|Δdepth|/lateral) split (bound: a slope of 1e3 is 89.94°)
         split_depth_slope: f64 = 4.0 => above(0.0, 1e3);
-        /// edge-midpoint photon hits off the linear prediction by more than this (camera px) split (Sect. 6; at most 16384, an image side)
+        /// edge-midpoint photon hits off the linear prediction by more than this (camera px) split (Sect. 6; bound: an image side)
         split_hit_px: f64 = 1.0 => above(0.0, 16384.0);
         /// split beams that carry much light or focus it (Sect. 4.2)
         split_energy: bool = true;
-        /// split while flux share x A(0)/A(where seen) exceeds this (the receiver; the narrowest point in a medium; at most 1e6, the largest max_focus)
+        /// split while flux share x A(0)/A(where seen) exceeds this (the receiver; the narrowest point in a medium; bound: share <= 1 times the largest max_focus)
         split_energy_threshold: f64 = 2.0 => above(0.0, 1e6);
         /// split beams that look large from the camera (Sect. 4.2)
         split_camera: bool = true;
-        /// split while the beam base spans more than this many pixels (at most 16384, an image side)
+        /// split while the beam base spans more than this many pixels (bound: an image side)
         split_camera_px: f64 = 16.0 => above(0.0, 16384.0);
     }
 }
