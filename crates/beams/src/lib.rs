@@ -166,10 +166,8 @@ pub struct BeamMethod {
     atlas: ImpostorAtlas,
     buffers: Buffers,
     generate: ComputePass,
-    /// Group 2 of `generate` for the kernels that write the indirect arguments.
+    /// Group 2 of `generate`: the indirect arguments, for the kernels that write them.
     args: wgpu::BindGroup,
-    /// Group 2 for the kernels dispatched from them: a placeholder buffer.
-    args_placeholder: wgpu::BindGroup,
     rasterize: RasterPass,
     surface_filter: RasterPass,
     pass_names: PassNames,
@@ -193,7 +191,6 @@ struct Buffers {
     control: wgpu::Buffer,
     control_init: wgpu::Buffer,
     indirect_args: wgpu::Buffer,
-    args_placeholder: wgpu::Buffer,
     filter_uniforms: wgpu::Buffer,
 }
 
@@ -250,7 +247,6 @@ impl Buffers {
                 wgpu::BufferUsages::COPY_SRC,
             ),
             indirect_args: storage("beam indirect args", 32, wgpu::BufferUsages::INDIRECT),
-            args_placeholder: storage("beam indirect args placeholder", 32, none),
             filter_uniforms: init(
                 "beam filter uniforms",
                 bytemuck::bytes_of(&filter),
@@ -271,7 +267,6 @@ impl Buffers {
                 &self.control,
                 &self.control_init,
                 &self.indirect_args,
-                &self.args_placeholder,
                 &self.filter_uniforms,
             ]
             .iter()
@@ -356,9 +351,13 @@ impl BeamMethod {
             )
             .caller_group(2)
             .kernels(&["init_grid", "decide", "scan", "emit", "advance", "finalize"])
+            // The kernels dispatched from the indirect arguments must not also bind
+            // them as storage (group 2): a buffer is one or the other in a dispatch.
+            .kernel_groups("decide", &[0, 1])
+            .kernel_groups("scan", &[0, 1])
+            .kernel_groups("emit", &[0, 1])
             .build()?;
         let args = indirect_args_group(device, &generate, &b.indirect_args)?;
-        let args_placeholder = indirect_args_group(device, &generate, &b.args_placeholder)?;
 
         let shader = Shader::new(ctx, "beams rasterize.wgsl", rasterize_source())?;
         let rasterize = RasterPass::builder(ctx, &format!("{name}/rasterize"), &shader, "vs_beam")
@@ -405,7 +404,6 @@ impl BeamMethod {
             buffers: b,
             generate,
             args,
-            args_placeholder,
             rasterize,
             surface_filter,
             pass_names: PassNames {
@@ -478,7 +476,7 @@ fn impostor_atlas(
     )?)
 }
 
-/// Group 2 of the generate pass: the indirect arguments `buffer` (or a placeholder).
+/// Group 2 of the generate pass: the indirect arguments `buffer`.
 fn indirect_args_group(
     device: &wgpu::Device,
     generate: &ComputePass,
@@ -512,11 +510,9 @@ impl CausticsMethod for BeamMethod {
             let base = 2 * self.config.beams.grid * self.config.beams.grid;
             pass.dispatch("init_grid", [base.div_ceil(64), 1, 1])?;
             for _ in 0..=self.config.refinement.levels {
-                pass.set_bind_group(2, &self.args_placeholder, &[]);
                 pass.dispatch_indirect("decide", &b.indirect_args, 0)?;
                 pass.dispatch("scan", [1, 1, 1])?;
                 pass.dispatch_indirect("emit", &b.indirect_args, 0)?;
-                pass.set_bind_group(2, &self.args, &[]);
                 pass.dispatch("advance", [1, 1, 1])?;
             }
             pass.dispatch("finalize", [1, 1, 1])?;

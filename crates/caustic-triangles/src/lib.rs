@@ -45,7 +45,8 @@
 //! ```
 
 use bytemuck::{Pod, Zeroable};
-use caustics_gpu::pass::{Bindable, ComputePass, RasterPass, Shader};
+use caustics_gpu::buffers::{storage_buffer, uniform_buffer};
+use caustics_gpu::pass::{ComputePass, RasterPass, Shader};
 use caustics_gpu::textures::additive_hdr_target;
 use caustics_gpu::wgpu;
 use caustics_gpu::{Frame, GpuContext, Renderer};
@@ -54,7 +55,7 @@ use caustics_method::{
     Capabilities, CausticsMethod, Counters, Method, MethodError, Unsupported, method_params,
 };
 use caustics_scene::Scene;
-use photon_hits::{CausticMap, PhotonHitConfig, PhotonHits, storage_buffer, uniform_buffer};
+use photon_hits::{CausticMap, PhotonHitConfig, PhotonHits};
 
 /// The shared photon-hit crate, for callers that read hits or the cube map back.
 pub use photon_hits;
@@ -145,7 +146,6 @@ pub struct CausticTriangles {
     hits: PhotonHits,
     map: CausticMap,
     areas: ComputePass,
-    irradiance: ComputePass,
     triangles: RasterPass,
     buffers: TriangleBuffers,
     triangle_count: u32,
@@ -222,22 +222,21 @@ impl CausticTriangles {
         // The discard rule and each triangle's receiver area, then ΔΦ/ΔA per vertex (§5).
         let areas_shader =
             Shader::new(ctx, "caustic-triangles areas.wgsl", pass_source(AREAS_WGSL))?;
-        let compute_group: [(&str, &dyn Bindable); 5] = [
-            ("tri", &b.uniform),
-            ("hits", &hits.hits),
-            ("tri_area", &b.tri_area),
-            ("vertex_irradiance", &b.vertex_irradiance),
-            ("tri_counters", &b.tri_counters),
-        ];
-        let compute = |name: &str, kernel: &str| {
-            ComputePass::builder(ctx, &format!("{NAME}/{name}"), &areas_shader)
-                .frame(renderer)
-                .bind(1, &compute_group)
-                .kernels(&[kernel])
-                .build()
-        };
-        let areas = compute("triangle_areas", "triangle_areas")?;
-        let irradiance = compute("vertex_irradiance", "vertex_irradiance_pass")?;
+        // One shader, one bind group; its two kernels are timed as two passes.
+        let areas = ComputePass::builder(ctx, &format!("{NAME}/triangle_areas"), &areas_shader)
+            .frame(renderer)
+            .bind(
+                1,
+                &[
+                    ("tri", &b.uniform),
+                    ("hits", &hits.hits),
+                    ("tri_area", &b.tri_area),
+                    ("vertex_irradiance", &b.vertex_irradiance),
+                    ("tri_counters", &b.tri_counters),
+                ],
+            )
+            .kernels(&["triangle_areas", "vertex_irradiance_pass"])
+            .build()?;
         // §4.2: every kept triangle into the six faces of the cube map, additively.
         let triangles_shader = Shader::new(
             ctx,
@@ -270,7 +269,6 @@ impl CausticTriangles {
             hits,
             map,
             areas,
-            irradiance,
             triangles,
             buffers: b,
             triangle_count,
@@ -310,10 +308,12 @@ impl CausticsMethod for CausticTriangles {
         self.areas
             .begin(frame)?
             .dispatch("triangle_areas", [self.triangle_count.div_ceil(64), 1, 1])?;
-        self.irradiance.begin(frame)?.dispatch(
-            "vertex_irradiance_pass",
-            [self.hits.texels().div_ceil(64), 1, 1],
-        )?;
+        self.areas
+            .begin_as(frame, &format!("{NAME}/vertex_irradiance"))?
+            .dispatch(
+                "vertex_irradiance_pass",
+                [self.hits.texels().div_ceil(64), 1, 1],
+            )?;
         {
             let target = self.map.reconstruction_attachment();
             let mut pass = self.triangles.begin(frame, &target, None)?;
@@ -348,9 +348,9 @@ impl CausticsMethod for CausticTriangles {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use caustics_gpu::layout::wgsl_u32_constant;
     use caustics_gpu::shader;
     use caustics_method::params::parse;
-    use photon_hits::wgsl_u32_const;
 
     #[test]
     fn shaders_validate() -> Result<(), String> {
@@ -375,7 +375,7 @@ mod tests {
     fn counter_names_follow_the_wgsl_constants() {
         for (index, (constant, _)) in TRI_REASONS.iter().enumerate() {
             assert_eq!(
-                wgsl_u32_const(GRID_WGSL, constant),
+                wgsl_u32_constant(GRID_WGSL, constant).ok(),
                 Some(index as u32),
                 "{constant}"
             );

@@ -424,9 +424,8 @@ fn ensure_references(
         );
         // Only for runs that will happen: a method that skips the scene needs none.
         let params = serde_json::Value::Object(spec.params.clone());
-        let runnable = crate::registry::find(&spec.method)?
-            .supports(scene, &params)
-            .is_ok();
+        let info = crate::registry::find(&spec.method)?;
+        let runnable = (info.parse)(&params).is_ok_and(|p| info.supports(scene, &p).is_ok());
         if !runnable
             || seen.contains(&label)
             || crate::references::find(&args.references, scene)?.is_some()

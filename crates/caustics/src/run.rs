@@ -92,9 +92,7 @@ pub enum RunOutcome {
 
 /// Turns `key=value` flags into a JSON object. Values parse as JSON when they can
 /// (numbers, booleans, quoted strings), else they are taken as strings.
-pub fn parse_param_flags(
-    flags: &[String],
-) -> Result<serde_json::Map<String, serde_json::Value>> {
+pub fn parse_param_flags(flags: &[String]) -> Result<serde_json::Map<String, serde_json::Value>> {
     let mut map = serde_json::Map::new();
     for flag in flags {
         let Some((key, value)) = flag.split_once('=') else {

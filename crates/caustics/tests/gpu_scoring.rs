@@ -19,7 +19,8 @@ fn every_method_repeats_its_timed_frame_at_the_pixel_centre() {
         // The first of the two scenes the method renders (fog_sphere has volume caustics).
         let Some(scene) = scenes.iter().find(|p| {
             let scene = caustics_scene::Scene::load(p).expect("scene");
-            info.supports(&scene, &serde_json::Value::Null).is_ok()
+            let defaults = (info.parse)(&serde_json::Value::Null).expect("defaults parse");
+            info.supports(&scene, &defaults).is_ok()
         }) else {
             panic!(
                 "{} renders neither sphere_on_plane nor fog_sphere",

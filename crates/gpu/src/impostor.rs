@@ -81,8 +81,8 @@ pub fn objects_bounds(scene: &GpuScene, objects: &[usize]) -> Option<Aabb> {
     bounds
 }
 
-/// The impostor render pass (one per renderer: [`crate::Renderer::impostor_pass`]);
-/// each face's view uniform is its group 0, set per face.
+/// The impostor render pass (built by each method that traces impostors); each face's
+/// view uniform is its group 0, set per face.
 pub struct ImpostorPass {
     pass: RasterPass,
 }

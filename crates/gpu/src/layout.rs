@@ -44,6 +44,22 @@ fn is_padding(name: &str) -> bool {
     name.starts_with('_') || name.starts_with("pad")
 }
 
+/// The value of the WGSL constant `const name: u32 = …;` in `source`, as naga
+/// evaluates it: for tests that check a Rust table indexed by WGSL constants.
+pub fn wgsl_u32_constant(source: &str, name: &str) -> Result<u32, String> {
+    let module = naga::front::wgsl::parse_str(source)
+        .map_err(|e| format!("WGSL parse error:\n{}", e.emit_to_string(source)))?;
+    let (_, constant) = module
+        .constants
+        .iter()
+        .find(|(_, c)| c.name.as_deref() == Some(name))
+        .ok_or_else(|| format!("the WGSL declares no constant {name}"))?;
+    match module.global_expressions[constant.init] {
+        naga::Expression::Literal(naga::Literal::U32(v)) => Ok(v),
+        ref other => Err(format!("{name} is not a u32 literal: {other:?}")),
+    }
+}
+
 /// Compares a Rust struct (its size and `(field, offset)` list, in declaration order)
 /// with the WGSL struct `wgsl_name` in `source`. Field names must equal member names;
 /// an explicitly renamed field is given as its WGSL name. Padding on either side
@@ -170,6 +186,14 @@ mod tests {
         flux: f32,
         id: u32,
         _pad: [u32; 2],
+    }
+
+    #[test]
+    fn u32_constants_are_read_from_the_shader() {
+        let src = "const A: u32 = 7u; const B: f32 = 1.0;";
+        assert_eq!(wgsl_u32_constant(src, "A"), Ok(7));
+        assert!(wgsl_u32_constant(src, "B").is_err());
+        assert!(wgsl_u32_constant(src, "C").is_err());
     }
 
     #[test]

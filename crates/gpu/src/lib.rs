@@ -21,6 +21,7 @@
 //! # Ok(()) }
 //! ```
 
+pub mod buffers;
 mod context;
 mod error;
 pub mod frame;

@@ -75,6 +75,9 @@ pub struct LightView {
     pub texel_size: f32,
     /// Light position (point/spot) or the centre of the fitted volume (directional).
     pub origin: Vec3,
+    /// Tangent of half the field of view of a face: 0 for an orthographic view, 1 for
+    /// the 90° cube faces, tan(fov/2) for a perspective face.
+    pub tan_half_fov: f32,
 }
 
 fn any_up(dir: Vec3) -> Vec3 {
@@ -111,6 +114,7 @@ impl LightView {
                     resolution,
                     texel_size: 2.0 * radius / resolution as f32,
                     origin: center,
+                    tan_half_fov: 0.0,
                 }
             }
             Light::Spot {
@@ -134,6 +138,7 @@ impl LightView {
                     resolution,
                     texel_size: 2.0 * (fov * 0.5).tan() / resolution as f32,
                     origin: position,
+                    tan_half_fov: (fov * 0.5).tan(),
                 }
             }
             Light::Point { position, .. } => {
@@ -156,6 +161,7 @@ impl LightView {
                     resolution,
                     texel_size: 2.0 / resolution as f32,
                     origin: position,
+                    tan_half_fov: 1.0,
                 }
             }
         }
@@ -163,16 +169,6 @@ impl LightView {
 }
 
 impl LightView {
-    /// Tangent of half the field of view of a face: 0 for an orthographic view, 1 for
-    /// the 90° cube faces, tan(fov/2) for a perspective face.
-    pub fn tan_half_fov(&self) -> f32 {
-        match self.projection {
-            LightProjection::Orthographic => 0.0,
-            LightProjection::Cube => 1.0,
-            LightProjection::Perspective => 0.5 * self.texel_size * self.resolution as f32,
-        }
-    }
-
     /// The light's view of a sphere (`center`, `radius`, e.g. a caustic generator's
     /// bounding sphere), `resolution` texels per side: every texel looks at the sphere
     /// where possible, so the resolution is spent on it (Umenhoffer et al. render the
@@ -190,7 +186,7 @@ impl LightView {
         let r = radius * 1.02;
         let back =
             (scene_bounds.center() - center).length() + scene_bounds.bounding_sphere_radius();
-        let single = |projection, view: Mat4, proj: Mat4, texel_size, origin| Self {
+        let single = |projection, view: Mat4, proj: Mat4, tan_half_fov: f32, origin| Self {
             projection,
             faces: vec![LightFace {
                 view,
@@ -198,21 +194,20 @@ impl LightView {
                 view_proj: proj * view,
             }],
             resolution,
-            texel_size,
+            texel_size: if projection == LightProjection::Orthographic {
+                2.0 * r / resolution as f32
+            } else {
+                2.0 * tan_half_fov / resolution as f32
+            },
             origin,
+            tan_half_fov,
         };
         match *light {
             Light::Directional { direction, .. } => {
                 let eye = center - direction * (back + r);
                 let view = Mat4::look_at_rh(eye, center, any_up(direction));
                 let proj = Mat4::orthographic_rh(-r, r, -r, r, 0.0, back + 2.0 * r);
-                single(
-                    LightProjection::Orthographic,
-                    view,
-                    proj,
-                    2.0 * r / resolution as f32,
-                    center,
-                )
+                single(LightProjection::Orthographic, view, proj, 0.0, center)
             }
             Light::Point { position, .. } | Light::Spot { position, .. } => {
                 let to = center - position;
@@ -227,7 +222,7 @@ impl LightView {
                         LightProjection::Perspective,
                         view,
                         proj,
-                        2.0 * half.tan() / resolution as f32,
+                        half.tan(),
                         position,
                     )
                 } else {
@@ -275,6 +270,7 @@ impl LightView {
                     resolution,
                     texel_size: 2.0 * half / resolution as f32,
                     origin: eye + dir * depth,
+                    tan_half_fov: 0.0,
                 })
             }
             Light::Point { position, .. } | Light::Spot { position, .. } => {
@@ -310,6 +306,7 @@ impl LightView {
                     resolution,
                     texel_size: 2.0 * (fov * 0.5).tan() / resolution as f32,
                     origin: position,
+                    tan_half_fov: (fov * 0.5).tan(),
                 })
             }
         }
@@ -352,7 +349,7 @@ mod tests {
         };
         let v = LightView::fit(&light, &bounds, 64);
         assert_eq!(v.projection, LightProjection::Cube);
-        assert_eq!(v.tan_half_fov(), 1.0);
+        assert_eq!(v.tan_half_fov, 1.0);
         for (face, f) in v.faces.iter().enumerate() {
             assert!(
                 f.view.abs_diff_eq(cube_face_view(face, Vec3::ZERO), 1e-6),
@@ -373,7 +370,7 @@ mod tests {
         };
         let v = LightView::fit_sphere(&light, Vec3::Y, 1.0, &bounds, 100);
         assert_eq!(v.projection, LightProjection::Orthographic);
-        assert_eq!(v.tan_half_fov(), 0.0);
+        assert_eq!(v.tan_half_fov, 0.0);
         assert!((v.texel_size - 2.04 / 100.0).abs() < 1e-6);
         let c = v.faces[0].view_proj.project_point3(Vec3::Y);
         assert!(c.x.abs() < 1e-5 && c.y.abs() < 1e-5 && (0.0..=1.0).contains(&c.z));
@@ -403,6 +400,6 @@ mod tests {
         let v = LightView::fit_sphere(&outside, Vec3::ZERO, 1.0, &bounds, 8);
         assert_eq!(v.projection, LightProjection::Perspective);
         let half = (1.02f32 / 2.5).asin();
-        assert!((v.tan_half_fov() - half.tan()).abs() < 1e-5);
+        assert!((v.tan_half_fov - half.tan()).abs() < 1e-5);
     }
 }

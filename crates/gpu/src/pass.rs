@@ -491,10 +491,50 @@ struct Groups<'a> {
     caller: Vec<u32>,
 }
 
-struct BuiltGroups {
+struct BuiltGroups<'a> {
     pipeline_layout: wgpu::PipelineLayout,
     schemas: BTreeMap<u32, BindGroupSchema>,
     sources: Vec<(u32, GroupSource)>,
+    frame: Option<&'a Renderer>,
+    groups: u32,
+}
+
+/// The layouts of groups `0..groups`, `None` for a group the shader leaves out (or,
+/// with `keep`, one not kept).
+fn group_layouts<'l>(
+    schemas: &'l BTreeMap<u32, BindGroupSchema>,
+    frame: Option<&'l Renderer>,
+    groups: u32,
+    keep: Option<&[u32]>,
+) -> Vec<Option<&'l wgpu::BindGroupLayout>> {
+    (0..groups)
+        .map(|g| {
+            if keep.is_some_and(|k| !k.contains(&g)) {
+                return None;
+            }
+            match (g, frame) {
+                (0, Some(r)) => Some(r.frame_layout()),
+                _ => schemas.get(&g).map(|s| &s.layout),
+            }
+        })
+        .collect()
+}
+
+impl BuiltGroups<'_> {
+    /// A pipeline layout of only the groups in `keep` (the others are holes): for a
+    /// kernel that must not see a group the pass's other kernels use.
+    fn pipeline_layout_of(
+        &self,
+        device: &wgpu::Device,
+        name: &str,
+        keep: &[u32],
+    ) -> wgpu::PipelineLayout {
+        device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some(name),
+            bind_group_layouts: &group_layouts(&self.schemas, self.frame, self.groups, Some(keep)),
+            immediate_size: 0,
+        })
+    }
 }
 
 impl<'a> Groups<'a> {
@@ -508,7 +548,7 @@ impl<'a> Groups<'a> {
         }
     }
 
-    fn build(self, name: &str) -> Result<BuiltGroups, GpuError> {
+    fn build(self, name: &str) -> Result<BuiltGroups<'a>, GpuError> {
         let declared: Vec<u32> = self.shader.reflection.groups.keys().copied().collect();
         let last = declared.iter().copied().max().map_or(0, |g| g + 1);
         let mut schemas = BTreeMap::new();
@@ -541,23 +581,19 @@ impl<'a> Groups<'a> {
                 )));
             }
         }
-        let layouts: Vec<Option<&wgpu::BindGroupLayout>> = (0..last)
-            .map(|g| match (g, self.frame) {
-                (0, Some(r)) => Some(r.frame_layout()),
-                _ => schemas.get(&g).map(|s| &s.layout),
-            })
-            .collect();
         let pipeline_layout = self
             .device
             .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
                 label: Some(name),
-                bind_group_layouts: &layouts,
+                bind_group_layouts: &group_layouts(&schemas, self.frame, last, None),
                 immediate_size: 0,
             });
         Ok(BuiltGroups {
             pipeline_layout,
             schemas,
             sources,
+            frame: self.frame,
+            groups: last,
         })
     }
 }
@@ -635,10 +671,12 @@ impl<'a, S> PassBuilder<'a, S> {
     }
 }
 
-/// What a compute pass declares: its kernels (entry points) and constants.
+/// What a compute pass declares: its kernels (entry points), constants and, for
+/// kernels that must not see every group, the groups they use.
 pub struct ComputeSpec<'a> {
     kernels: Vec<&'a str>,
     constants: Vec<(&'a str, f64)>,
+    kernel_groups: Vec<(&'a str, Vec<u32>)>,
 }
 
 /// Declares a [`ComputePass`].
@@ -658,6 +696,7 @@ impl ComputePass {
             ComputeSpec {
                 kernels: Vec::new(),
                 constants: Vec::new(),
+                kernel_groups: Vec::new(),
             },
         )
     }
@@ -674,8 +713,19 @@ impl ComputePass {
 
     /// Opens the pass in `frame` (profiled under its name) with its bind groups set.
     pub fn begin<'f>(&'f self, frame: &'f mut Frame<'_>) -> Result<ComputeRecorder<'f>, GpuError> {
+        self.begin_as(frame, &self.name)
+    }
+
+    /// [`ComputePass::begin`] profiled under another name: kernels of one shader and
+    /// one set of bind groups timed as separate passes (e.g. caustic triangles'
+    /// `triangle_areas` and `vertex_irradiance`).
+    pub fn begin_as<'f>(
+        &'f self,
+        frame: &'f mut Frame<'_>,
+        name: &str,
+    ) -> Result<ComputeRecorder<'f>, GpuError> {
         let renderer = frame.renderer;
-        let mut pass = frame.compute_pass(&self.name)?;
+        let mut pass = frame.compute_pass(name)?;
         set_groups(&mut *pass, &self.sources, renderer);
         Ok(ComputeRecorder { pass, owner: self })
     }
@@ -702,6 +752,14 @@ impl<'a> ComputePassBuilder<'a> {
         self
     }
 
+    /// `kernel`'s pipeline sees only `groups` (the others stay bound but are not part of
+    /// its dispatches): e.g. a buffer written as storage by some kernels and read as
+    /// indirect arguments by others must not be bound to the latter.
+    pub fn kernel_groups(mut self, kernel: &'a str, groups: &[u32]) -> Self {
+        self.spec.kernel_groups.push((kernel, groups.to_vec()));
+        self
+    }
+
     /// Creates the layouts, bind groups and pipelines (inside a wgpu error scope).
     pub fn build(self) -> Result<ComputePass, GpuError> {
         let shader = self.groups.shader;
@@ -710,17 +768,32 @@ impl<'a> ComputePassBuilder<'a> {
         }
         let name = self.name;
         let device = &self.ctx.device;
-        let ComputeSpec { kernels, constants } = self.spec;
+        let ComputeSpec {
+            kernels,
+            constants,
+            kernel_groups,
+        } = self.spec;
+        for (k, _) in &kernel_groups {
+            if !kernels.contains(k) {
+                return Err(GpuError::Invalid(format!(
+                    "pass {name}: kernel_groups names {k:?}, which is not one of its kernels"
+                )));
+            }
+        }
         let groups = self.groups;
         self.ctx.checked(&format!("pass {name}"), || {
             let built = groups.build(&name)?;
             let kernels = kernels
                 .iter()
                 .map(|entry| {
+                    let subset = kernel_groups
+                        .iter()
+                        .find(|(k, _)| k == entry)
+                        .map(|(_, g)| built.pipeline_layout_of(device, &name, g));
                     let pipeline =
                         device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                             label: Some(&format!("{name}:{entry}")),
-                            layout: Some(&built.pipeline_layout),
+                            layout: Some(subset.as_ref().unwrap_or(&built.pipeline_layout)),
                             module: &shader.module,
                             entry_point: Some(entry),
                             compilation_options: wgpu::PipelineCompilationOptions {

@@ -6,11 +6,8 @@ use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3};
 use wgpu::util::DeviceExt;
 
-use std::sync::OnceLock;
-
 use crate::frame::Frame;
 use crate::gbuffer::{GBuffer, GBufferPass, LightProjection, LightView, ShadowMap, ViewUniform};
-use crate::impostor::ImpostorPass;
 use crate::pass::{BindGroupSchema, RasterPass, Shader};
 use crate::profiling::{FrameMode, PassProfiler};
 use crate::scene_upload::{GpuLight, GpuScene, gpu_light};
@@ -77,7 +74,6 @@ pub struct Renderer {
     device: wgpu::Device,
     scene: GpuScene,
     gbuffer_pass: GBufferPass,
-    impostor_pass: OnceLock<ImpostorPass>,
     camera_gbuffer: GBuffer,
     direct: DirectLighting,
     targets: RadianceTargets,
@@ -312,7 +308,6 @@ impl Renderer {
             device: device.clone(),
             scene,
             gbuffer_pass,
-            impostor_pass: OnceLock::new(),
             camera_gbuffer,
             direct,
             targets,
@@ -407,16 +402,6 @@ impl Renderer {
     /// The G-buffer pass, for methods that rasterize their own light views.
     pub fn gbuffer_pass(&self) -> &GBufferPass {
         &self.gbuffer_pass
-    }
-
-    /// The distance-impostor pass (built on first use: only methods that trace
-    /// impostors need it).
-    pub fn impostor_pass(&self, ctx: &GpuContext) -> Result<&ImpostorPass, GpuError> {
-        if let Some(pass) = self.impostor_pass.get() {
-            return Ok(pass);
-        }
-        let pass = ImpostorPass::new(ctx)?;
-        Ok(self.impostor_pass.get_or_init(|| pass))
     }
 
     /// Bytes of GPU memory owned by the base renderer (scene, G-buffers, targets).

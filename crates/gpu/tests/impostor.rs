@@ -6,7 +6,8 @@ use caustics_gpu::pass::{ComputePass, Shader};
 use caustics_gpu::readback::read_buffer_bytes;
 use caustics_gpu::wgpu::{self, util::DeviceExt};
 use caustics_gpu::{
-    AdapterChoice, FrameMode, GpuContext, GpuScene, PassProfiler, Renderer, RendererOptions, shader,
+    AdapterChoice, FrameMode, GpuContext, GpuScene, ImpostorPass, PassProfiler, Renderer,
+    RendererOptions, shader,
 };
 use caustics_scene::{Scene, Vec3};
 
@@ -59,7 +60,7 @@ fn trace_in(
         GpuContext::new(&AdapterChoice::from_flag_or_env(None)).unwrap_or_else(|e| panic!("{e}"));
     let gpu_scene = GpuScene::upload(&ctx, scene.into(), Default::default()).expect("upload");
     let renderer = Renderer::new(&ctx, gpu_scene, RendererOptions::default()).expect("renderer");
-    let pass = renderer.impostor_pass(&ctx).expect("impostor pass");
+    let pass = ImpostorPass::new(&ctx).expect("impostor pass");
     let impostor = match center {
         Some(c) => pass.impostor_around(&ctx.device, renderer.scene(), objects, c, 256),
         None => pass.impostor(&ctx.device, renderer.scene(), objects, 256),

@@ -15,7 +15,9 @@ use caustics_gpu::{Frame, GpuContext, GpuError, Renderer};
 use caustics_method::MethodError;
 use caustics_scene::{Mat4, Vec3};
 
-use crate::{LOOKUP_WGSL, PhotonHitConfig, compose, uniform_buffer};
+use caustics_gpu::buffers::uniform_buffer;
+
+use crate::{LOOKUP_WGSL, PhotonHitConfig, compose};
 
 /// Matches `CausticMapUniform` in types.wgsl.
 #[repr(C)]

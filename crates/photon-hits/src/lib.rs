@@ -38,16 +38,16 @@ mod cube_map;
 pub use cube_map::{CausticMap, face_origin};
 
 use bytemuck::{Pod, Zeroable};
+use caustics_gpu::buffers::{storage_buffer, uniform_buffer};
 use caustics_gpu::impostor::{DistanceImpostor, IMPOSTOR_TRACE_WGSL, ImpostorPass, objects_bounds};
 use caustics_gpu::pass::{ComputePass, Shader};
-use caustics_gpu::wgpu::{self, util::DeviceExt};
+use caustics_gpu::wgpu;
 use caustics_gpu::{
-    Frame, GBuffer, GpuContext, GpuError, GpuScene, LightProjection, LightView, Renderer,
-    gbuffer::LightFace, shader,
+    Frame, GBuffer, GpuContext, GpuError, GpuScene, LightProjection, LightView, Renderer, shader,
 };
 use caustics_method::params::{above, closed};
 use caustics_method::{Counters, MethodError, Unsupported};
-use caustics_scene::{Light, Mat4, Material, Scene, Shape, Vec3};
+use caustics_scene::{Material, Scene, Shape, Vec3};
 
 /// Types shared by every photon-hit pass (`PhotonHit`, `CausticMapUniform`).
 pub const TYPES_WGSL: &str = include_str!("types.wgsl");
@@ -156,78 +156,6 @@ pub fn caustic_generator(scene: &Scene) -> Result<(usize, GeneratorKind), Unsupp
 /// Scene checks shared by both methods.
 pub fn check_scene(scene: &Scene) -> Result<(), Unsupported> {
     caustic_generator(scene).map(|_| ())
-}
-
-fn any_up(dir: Vec3) -> Vec3 {
-    if dir.y.abs() < 0.99 { Vec3::Y } else { Vec3::Z }
-}
-
-/// The light's view of the generator (a sphere `center`, `radius`), `resolution`
-/// texels per side, and tan of its half field of view (1 for cube faces, 0 for
-/// orthographic views). Every texel then looks at the generator where possible, so
-/// the hit resolution is spent on it, as the paper renders the generator from the light.
-pub fn photon_view(
-    light: &Light,
-    scene_bounds: &caustics_scene::Aabb,
-    center: Vec3,
-    radius: f32,
-    resolution: u32,
-) -> (LightView, f32) {
-    let r = radius * 1.02;
-    // Far enough back that objects between the light and the generator are drawn
-    // (they shadow it).
-    let back = (scene_bounds.center() - center).length() + scene_bounds.bounding_sphere_radius();
-    match *light {
-        Light::Directional { direction, .. } => {
-            let eye = center - direction * (back + r);
-            let view = Mat4::look_at_rh(eye, center, any_up(direction));
-            let proj = Mat4::orthographic_rh(-r, r, -r, r, 0.0, back + 2.0 * r);
-            let face = LightFace {
-                view,
-                proj,
-                view_proj: proj * view,
-            };
-            (
-                LightView {
-                    projection: LightProjection::Orthographic,
-                    faces: vec![face],
-                    resolution,
-                    texel_size: 2.0 * r / resolution as f32,
-                    origin: center,
-                },
-                0.0,
-            )
-        }
-        Light::Point { position, .. } | Light::Spot { position, .. } => {
-            let to = center - position;
-            let dist = to.length();
-            if dist > r * 1.01 && (r / dist).asin() < 80f32.to_radians() {
-                let half = (r / dist).asin();
-                let far = dist + r;
-                let near = (far * 1e-4).max(1e-4);
-                let view = Mat4::look_at_rh(position, center, any_up(to / dist));
-                let proj = Mat4::perspective_rh(2.0 * half, 1.0, near, far);
-                let tan_half = half.tan();
-                let face = LightFace {
-                    view,
-                    proj,
-                    view_proj: proj * view,
-                };
-                (
-                    LightView {
-                        projection: LightProjection::Perspective,
-                        faces: vec![face],
-                        resolution,
-                        texel_size: 2.0 * tan_half / resolution as f32,
-                        origin: position,
-                    },
-                    tan_half,
-                )
-            } else {
-                (LightView::fit(light, scene_bounds, resolution), 1.0)
-            }
-        }
-    }
 }
 
 /// Matches `TraceUniform` in trace.wgsl.
@@ -399,13 +327,15 @@ impl PhotonHits {
         let gpu_scene = renderer.scene();
         let scene = &gpu_scene.scene;
         let g = Generator::locate(gpu_scene, method)?;
-        let (view, tan_half) = photon_view(
+        // The paper renders the generator from the light: every texel looks at it.
+        let view = LightView::fit_sphere(
             &scene.lights[0],
-            &scene.bounds(),
             g.center,
             g.radius,
+            &scene.bounds(),
             config.resolution,
         );
+        let tan_half = view.tan_half_fov;
         let device = &ctx.device;
         let (light_gbuffer, maps, uniform, hits, counters) =
             ctx.checked("photon hits setup", || -> Result<_, GpuError> {
@@ -529,45 +459,6 @@ impl PhotonHits {
     }
 }
 
-/// A uniform buffer holding `value`.
-pub fn uniform_buffer<T: Pod>(device: &wgpu::Device, label: &str, value: &T) -> wgpu::Buffer {
-    device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: Some(label),
-        contents: bytemuck::bytes_of(value),
-        usage: wgpu::BufferUsages::UNIFORM,
-    })
-}
-
-/// A storage buffer of `size` bytes that can be read back (and cleared, if `clear`).
-pub fn storage_buffer(device: &wgpu::Device, label: &str, size: u64, clear: bool) -> wgpu::Buffer {
-    let mut usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
-    if clear {
-        usage |= wgpu::BufferUsages::COPY_DST;
-    }
-    device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some(label),
-        size,
-        usage,
-        mapped_at_creation: false,
-    })
-}
-
-/// The value of `const NAME: u32 = <n>u;` in `source`, for tests that check a Rust
-/// table indexed by WGSL constants (counter names) against the shader.
-#[doc(hidden)]
-pub fn wgsl_u32_const(source: &str, name: &str) -> Option<u32> {
-    source.lines().find_map(|line| {
-        let rest = line.trim().strip_prefix("const ")?.strip_prefix(name)?;
-        let value = rest.trim_start().strip_prefix(": u32 =")?;
-        value
-            .trim()
-            .trim_end_matches(';')
-            .trim_end_matches('u')
-            .parse()
-            .ok()
-    })
-}
-
 /// `PhotonHit` of types.wgsl, as read back.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
@@ -629,7 +520,7 @@ mod tests {
     fn counter_names_follow_the_wgsl_constants() {
         for (index, (constant, _)) in HIT_REASONS.iter().enumerate() {
             assert_eq!(
-                wgsl_u32_const(TYPES_WGSL, constant),
+                caustics_gpu::layout::wgsl_u32_constant(TYPES_WGSL, constant).ok(),
                 Some(index as u32),
                 "{constant}"
             );
@@ -679,50 +570,5 @@ mod tests {
             let msg = bad.check().expect_err(needle);
             assert!(msg.contains(needle), "{msg}");
         }
-    }
-
-    #[test]
-    fn directional_view_is_fitted_to_the_generator() {
-        let light = Light::Directional {
-            direction: Vec3::new(0.0, -1.0, 0.0),
-            irradiance: Vec3::ONE,
-        };
-        let bounds = caustics_scene::Aabb {
-            min: Vec3::splat(-10.0),
-            max: Vec3::splat(10.0),
-        };
-        let (v, tan_half) = photon_view(&light, &bounds, Vec3::Y, 1.0, 100);
-        assert_eq!(v.projection, LightProjection::Orthographic);
-        assert_eq!(tan_half, 0.0);
-        assert!((v.texel_size - 2.04 / 100.0).abs() < 1e-6);
-        // The generator's centre projects to the middle of the view.
-        let c = v.faces[0].view_proj.project_point3(Vec3::Y);
-        assert!(c.x.abs() < 1e-5 && c.y.abs() < 1e-5 && (0.0..=1.0).contains(&c.z));
-    }
-
-    #[test]
-    fn point_light_inside_the_generator_uses_the_cube() {
-        let bounds = caustics_scene::Aabb {
-            min: Vec3::splat(-3.0),
-            max: Vec3::splat(3.0),
-        };
-        let inside = Light::Point {
-            position: Vec3::ZERO,
-            intensity: Vec3::ONE,
-        };
-        assert_eq!(
-            photon_view(&inside, &bounds, Vec3::ZERO, 1.0, 8)
-                .0
-                .faces
-                .len(),
-            6
-        );
-        let outside = Light::Point {
-            position: Vec3::new(0.0, 3.0, 0.0),
-            intensity: Vec3::ONE,
-        };
-        let (v, tan_half) = photon_view(&outside, &bounds, Vec3::ZERO, 1.0, 8);
-        assert_eq!(v.faces.len(), 1);
-        assert!((tan_half - (1.02f32 / 3.0).asin().tan()).abs() < 1e-5);
     }
 }

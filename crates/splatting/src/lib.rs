@@ -127,14 +127,16 @@ impl Splatting {
     ) -> Result<Self, MethodError> {
         let hits = PhotonHits::new(ctx, renderer, NAME, &params.hits)?;
         let map = CausticMap::new(ctx, renderer, NAME, hits.center, hits.reach, &params.hits)?;
-        let splat_uniform = ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("splat params"),
-            contents: bytemuck::bytes_of(&SplatUniform {
-                kernel_px: params.kernel_px,
-                _pad: [0; 3],
-            }),
-            usage: wgpu::BufferUsages::UNIFORM,
-        });
+        let splat_uniform = ctx
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("splat params"),
+                contents: bytemuck::bytes_of(&SplatUniform {
+                    kernel_px: params.kernel_px,
+                    _pad: [0; 3],
+                }),
+                usage: wgpu::BufferUsages::UNIFORM,
+            });
         let shader = Shader::new(ctx, "splatting splat.wgsl", splat_source())?;
         // All six faces in one pass: each hit is drawn once per face, clipped to it.
         let splat_pass = RasterPass::builder(ctx, "splatting/splat", &shader, "vs_splat")
