@@ -375,7 +375,7 @@ mod tests {
     fn counter_names_follow_the_wgsl_constants() {
         for (index, (constant, _)) in TRI_REASONS.iter().enumerate() {
             assert_eq!(
-                wgsl_u32_constant(GRID_WGSL, constant).ok(),
+                wgsl_u32_constant(&pass_source(AREAS_WGSL), constant).ok(),
                 Some(index as u32),
                 "{constant}"
             );

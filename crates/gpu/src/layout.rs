@@ -45,7 +45,9 @@ fn is_padding(name: &str) -> bool {
 }
 
 /// The value of the WGSL constant `const name: u32 = …;` in `source`, as naga
-/// evaluates it: for tests that check a Rust table indexed by WGSL constants.
+/// evaluates it: for tests that check a Rust table indexed by WGSL constants. naga's
+/// WGSL front end drops constants nothing uses, so pass the source of a shader that
+/// uses them.
 pub fn wgsl_u32_constant(source: &str, name: &str) -> Result<u32, String> {
     let module = naga::front::wgsl::parse_str(source)
         .map_err(|e| format!("WGSL parse error:\n{}", e.emit_to_string(source)))?;
@@ -53,7 +55,7 @@ pub fn wgsl_u32_constant(source: &str, name: &str) -> Result<u32, String> {
         .constants
         .iter()
         .find(|(_, c)| c.name.as_deref() == Some(name))
-        .ok_or_else(|| format!("the WGSL declares no constant {name}"))?;
+        .ok_or_else(|| format!("the WGSL declares (or uses) no constant {name}"))?;
     match module.global_expressions[constant.init] {
         naga::Expression::Literal(naga::Literal::U32(v)) => Ok(v),
         ref other => Err(format!("{name} is not a u32 literal: {other:?}")),
@@ -190,7 +192,7 @@ mod tests {
 
     #[test]
     fn u32_constants_are_read_from_the_shader() {
-        let src = "const A: u32 = 7u; const B: f32 = 1.0;";
+        let src = "const A: u32 = 7u; const B: f32 = 1.0; fn f() -> f32 { return f32(A) * B; }";
         assert_eq!(wgsl_u32_constant(src, "A"), Ok(7));
         assert!(wgsl_u32_constant(src, "B").is_err());
         assert!(wgsl_u32_constant(src, "C").is_err());
