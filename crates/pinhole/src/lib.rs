@@ -130,8 +130,8 @@ method_params! {
         /// off | curvature | full: textureSampleGrad footprint of each sample's patch (§3.3)
         filtering: Filtering = Filtering::Full;
         /// angular radius (rad) of the light in the cube map, seen from the generator's
-        /// centre (paper: 0.016; at most 0.5 rad, beyond which the light is no longer
-        /// small and its map's cone leaves the one face it is stored on)
+        /// centre (paper: 0.016; at most 0.5 rad = 29°: the one stored face holds cones
+        /// under 45°, and a light that wide is no longer the paper's small source)
         light_angle: f64 = 0.016 => above(0.0, 0.5);
         /// cube map face size in texels (power of two, 8 to 2048: a 2048² R16F map with
         /// mips is 11 MB)
