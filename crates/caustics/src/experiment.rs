@@ -23,6 +23,8 @@
 //! A parameter given as an array is swept (the cartesian product over all swept
 //! parameters of a group); `params` may also be an array of such objects (their union).
 //! `"scenes": "*"` is every built-in scene and `"methods": "*"` every registered method.
+//! An optional `figures` list declares what to draw from the runs (image grids, lines,
+//! ratios, tables; [`crate::figure_spec`]).
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -106,6 +108,10 @@ pub struct ExperimentFile {
     /// The paper's own figures, shown beside the measured ones.
     #[serde(default)]
     pub paper: Option<Paper>,
+    /// Figures to draw from the runs (image grids, lines, ratios, tables), checked at load
+    /// ([`crate::figure_spec`]) and drawn into `figures/` beside the summary.
+    #[serde(default)]
+    pub figures: Vec<crate::figure_spec::FigureDecl>,
 }
 
 fn default_frames() -> u32 {
@@ -306,8 +312,14 @@ pub struct Experiment {
     pub def: ExperimentFile,
     /// FNV-1a of the file bytes, so shards of different versions are not merged.
     pub hash: String,
+    /// FNV-1a of what the runs are made from: the file's JSON without `description`,
+    /// `paper` and `figures`, which only change what the summary shows. `reproduce
+    /// --summary-only` redraws a folder whose file changed only there.
+    pub runs_hash: String,
     /// Every run, in file order (groups, then scenes, methods, parameter sets).
     pub runs: Vec<RunSpec>,
+    /// The declared figures, checked against `runs`.
+    pub figures: Vec<crate::figure_spec::Figure>,
 }
 
 /// `bench/experiments` of the workspace.
@@ -582,11 +594,21 @@ impl Experiment {
                 }
             }
         }
+        let figures = crate::figure_spec::parse(&def.figures, &runs, &invalid)?;
+        let mut what_runs: serde_json::Value =
+            serde_json::from_slice(&bytes).map_err(|e| invalid("(root)", e.to_string()))?;
+        if let Some(o) = what_runs.as_object_mut() {
+            for presentation in ["description", "paper", "figures"] {
+                o.remove(presentation);
+            }
+        }
         Ok(Experiment {
             file: file.into(),
             hash: fnv_hex(&bytes),
+            runs_hash: fnv_hex(what_runs.to_string().as_bytes()),
             def,
             runs,
+            figures,
         })
     }
 

@@ -3,11 +3,13 @@
 //! The harness owns timing, fill counting and scoring so every method is measured
 //! the same way (DESIGN "The method contract"). Experiments as data
 //! (`bench/experiments/*.json`, [`experiment`]), `caustics reproduce` and `merge`
-//! ([`reproduce`], [`summary`], [`plots`]) and the regression gate `caustics compare`
+//! ([`reproduce`], [`summary`], [`plots`], the declared [`figures`]) and the regression gate `caustics compare`
 //! ([`compare`]) and the static HTML report ([`report`]) build on `run`.
 
 pub mod compare;
 pub mod experiment;
+pub mod figure_spec;
+pub mod figures;
 pub mod machine;
 pub mod plots;
 pub mod reference_cmd;

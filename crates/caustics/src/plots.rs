@@ -23,7 +23,7 @@ use plotters::prelude::*;
 
 use crate::summary::{Row, Summary, num};
 
-const PALETTE: [[u8; 3]; 8] = [
+pub(crate) const PALETTE: [[u8; 3]; 8] = [
     [31, 119, 180],
     [255, 127, 14],
     [44, 160, 44],
@@ -33,8 +33,10 @@ const PALETTE: [[u8; 3]; 8] = [
     [227, 119, 194],
     [127, 127, 127],
 ];
-const INK: [u8; 3] = [20, 20, 20];
+pub(crate) const INK: [u8; 3] = [20, 20, 20];
 const GRID: [u8; 3] = [225, 225, 225];
+/// Colour of fits and reference lines.
+pub(crate) const GUIDE: [u8; 3] = [120, 120, 120];
 
 /// An axis: value range, linear or log10.
 #[derive(Clone, Copy, Debug)]
@@ -136,21 +138,58 @@ fn tick_label(v: f64) -> String {
     }
 }
 
-fn colour(c: [u8; 3]) -> RGBColor {
+pub(crate) fn colour(c: [u8; 3]) -> RGBColor {
     RGBColor(c[0], c[1], c[2])
 }
 
-fn plot_err<E: std::fmt::Debug>(e: E) -> anyhow::Error {
+pub(crate) fn plot_err<E: std::fmt::Debug>(e: E) -> anyhow::Error {
     anyhow!("drawing a plot: {e:?}")
 }
 
-/// A named series: colour, points, and whether they are joined by a line.
-type Series = (String, [u8; 3], Vec<(f64, f64)>, bool);
+/// How a series is drawn.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum Style {
+    /// Dots.
+    Points,
+    /// Dots joined by a line.
+    Line,
+    /// A dashed line without dots (fits, reference lines).
+    Dashed,
+}
+
+/// A named series of points.
+#[derive(Clone, Debug)]
+pub(crate) struct Series {
+    /// Legend text.
+    pub(crate) name: String,
+    /// Its colour.
+    pub(crate) colour: [u8; 3],
+    /// (x, y) in data units.
+    pub(crate) points: Vec<(f64, f64)>,
+    /// How it is drawn.
+    pub(crate) style: Style,
+}
+
+impl Series {
+    pub(crate) fn new(
+        name: impl Into<String>,
+        colour: [u8; 3],
+        points: Vec<(f64, f64)>,
+        style: Style,
+    ) -> Self {
+        Series {
+            name: name.into(),
+            colour,
+            points,
+            style,
+        }
+    }
+}
 
 /// Text to draw after plotters is done: (x, y, text, vertical).
-type Labels = Vec<(i32, i32, String, bool)>;
+pub(crate) type Labels = Vec<(i32, i32, String, bool)>;
 
-fn finish(buf: Vec<u8>, w: u32, h: u32, labels: &Labels, path: &Path) -> Result<()> {
+pub(crate) fn finish(buf: Vec<u8>, w: u32, h: u32, labels: &Labels, path: &Path) -> Result<()> {
     let mut img = Rgb8Image {
         width: w,
         height: h,
@@ -168,9 +207,9 @@ fn finish(buf: Vec<u8>, w: u32, h: u32, labels: &Labels, path: &Path) -> Result<
     Ok(())
 }
 
-/// A scatter plot with axes, ticks, labels, legend; `series` are (name, colour,
-/// points, connect-with-line).
-fn scatter(
+/// A scatter plot with axes, ticks, labels, legend. An axis whose values span more than
+/// 20× goes log10; points a log axis cannot show (≤ 0) are left out.
+pub(crate) fn scatter(
     path: &Path,
     title: &str,
     x_label: &str,
@@ -178,7 +217,7 @@ fn scatter(
     series: &[Series],
 ) -> Result<()> {
     let (w, h) = (720u32, 420u32);
-    let all: Vec<(f64, f64)> = series.iter().flat_map(|s| s.2.clone()).collect();
+    let all: Vec<(f64, f64)> = series.iter().flat_map(|s| s.points.clone()).collect();
     let xa = Axis::fit(&all.iter().map(|p| p.0).collect::<Vec<_>>());
     let ya = Axis::fit(&all.iter().map(|p| p.1).collect::<Vec<_>>());
     let mut buf = vec![255u8; (w * h * 3) as usize];
@@ -222,36 +261,62 @@ fn scatter(
         chart
             .draw_series(LineSeries::new(frame, colour(INK)))
             .map_err(plot_err)?;
-        for (i, (name, c, pts, line)) in series.iter().enumerate() {
-            let mapped: Vec<(f64, f64)> = pts.iter().map(|p| (xa.map(p.0), ya.map(p.1))).collect();
-            if *line {
-                chart
-                    .draw_series(LineSeries::new(mapped.clone(), colour(*c).stroke_width(1)))
-                    .map_err(plot_err)?;
-                chart
-                    .draw_series(
-                        mapped
-                            .iter()
-                            .map(|p| Circle::new(*p, 2, colour(*c).filled())),
-                    )
-                    .map_err(plot_err)?;
-            } else {
-                chart
-                    .draw_series(
-                        mapped
-                            .iter()
-                            .map(|p| Circle::new(*p, 4, colour(*c).filled())),
-                    )
-                    .map_err(plot_err)?;
+        for (i, s) in series.iter().enumerate() {
+            let c = colour(s.colour);
+            let shown = |v: f64, a: &Axis| v.is_finite() && (!a.log || v > 0.0);
+            let mapped: Vec<(f64, f64)> = s
+                .points
+                .iter()
+                .filter(|p| shown(p.0, &xa) && shown(p.1, &ya))
+                .map(|p| (xa.map(p.0), ya.map(p.1)))
+                .collect();
+            match s.style {
+                Style::Line => {
+                    chart
+                        .draw_series(LineSeries::new(mapped.clone(), c.stroke_width(1)))
+                        .map_err(plot_err)?;
+                    chart
+                        .draw_series(mapped.iter().map(|p| Circle::new(*p, 2, c.filled())))
+                        .map_err(plot_err)?;
+                }
+                Style::Points => {
+                    chart
+                        .draw_series(mapped.iter().map(|p| Circle::new(*p, 4, c.filled())))
+                        .map_err(plot_err)?;
+                }
+                Style::Dashed => {
+                    // Dashes of about 6 px, cut in the chart's (linear) mapped space.
+                    for seg in mapped.windows(2) {
+                        let (a, b) = (seg[0], seg[1]);
+                        let (pa, pb) = (chart.backend_coord(&a), chart.backend_coord(&b));
+                        let len = f64::from((pb.0 - pa.0).pow(2) + (pb.1 - pa.1).pow(2)).sqrt();
+                        let n = ((len / 6.0).ceil() as usize).max(1);
+                        let at = |t: f64| (a.0 + t * (b.0 - a.0), a.1 + t * (b.1 - a.1));
+                        for k in (0..n).step_by(2) {
+                            let (t0, t1) =
+                                (k as f64 / n as f64, ((k + 1) as f64 / n as f64).min(1.0));
+                            chart
+                                .draw_series(LineSeries::new([at(t0), at(t1)], c.stroke_width(1)))
+                                .map_err(plot_err)?;
+                        }
+                    }
+                }
             }
             // Legend entry in the right margin.
             let (lx, ly) = (w as i32 - 200, 36 + 14 * i as i32);
-            root.draw(&Rectangle::new(
-                [(lx, ly), (lx + 10, ly + if *line { 2 } else { 8 })],
-                colour(*c).filled(),
-            ))
-            .map_err(plot_err)?;
-            labels.push((lx + 16, ly, name.clone(), false));
+            let legend_h = if s.style == Style::Points { 8 } else { 2 };
+            let legend_w = if s.style == Style::Dashed { 4 } else { 10 };
+            for dx in [0, 6]
+                .into_iter()
+                .take(if s.style == Style::Dashed { 2 } else { 1 })
+            {
+                root.draw(&Rectangle::new(
+                    [(lx + dx, ly), (lx + dx + legend_w, ly + legend_h)],
+                    c.filled(),
+                ))
+                .map_err(plot_err)?;
+            }
+            labels.push((lx + 16, ly, s.name.clone(), false));
         }
         root.present().map_err(plot_err)?;
     }
@@ -286,7 +351,7 @@ pub fn pareto_front(points: &[(f64, f64)]) -> Vec<(f64, f64)> {
     front
 }
 
-fn file_safe(s: &str) -> String {
+pub(crate) fn file_safe(s: &str) -> String {
     s.chars()
         .map(|c| {
             if c.is_ascii_alphanumeric() || c == '-' {
@@ -458,13 +523,23 @@ pub fn write_plots(dir: &Path, s: &Summary) -> Result<Vec<String>> {
                     .collect();
                 if !pts.is_empty() {
                     all.extend(pts.iter().copied());
-                    series.push((m.clone(), PALETTE[i % PALETTE.len()], pts, false));
+                    series.push(Series::new(
+                        m.clone(),
+                        PALETTE[i % PALETTE.len()],
+                        pts,
+                        Style::Points,
+                    ));
                 }
             }
             if all.is_empty() {
                 continue;
             }
-            series.push(("pareto front".into(), INK, pareto_front(&all), true));
+            series.push(Series::new(
+                "pareto front",
+                INK,
+                pareto_front(&all),
+                Style::Line,
+            ));
             let path = need(
                 &mut written,
                 format!("{stem}_vs_time_{}.png", file_safe(scene)),
@@ -526,7 +601,7 @@ pub fn write_plots(dir: &Path, s: &Summary) -> Result<Vec<String>> {
                     .enumerate()
                     .map(|(i, (label, mut pts))| {
                         pts.sort_by(|a, b| a.0.total_cmp(&b.0));
-                        (label, PALETTE[i % PALETTE.len()], pts, true)
+                        Series::new(label, PALETTE[i % PALETTE.len()], pts, Style::Line)
                     })
                     .collect();
                 let path = need(
@@ -644,7 +719,12 @@ mod tests {
             "title",
             "x",
             "y",
-            &[("a".into(), PALETTE[0], vec![(1.0, 2.0), (2.0, 1.0)], false)],
+            &[Series::new(
+                "a",
+                PALETTE[0],
+                vec![(1.0, 2.0), (2.0, 1.0)],
+                Style::Points,
+            )],
         )
         .expect("plot");
         let img = caustics_metrics::read_png(&p).expect("png");
@@ -691,6 +771,7 @@ mod tests {
             failed: 0,
             missing_references: vec![],
             runs: vec![row("a", "m1", 10), row("b", "m2", 100)],
+            figures: vec![],
         };
         std::fs::create_dir_all(tmp.path().join("plots")).expect("mkdir");
         std::fs::write(tmp.path().join("plots/error_vs_time_old.png"), b"stale").expect("write");

@@ -1,7 +1,8 @@
 //! `caustics report [DIR]`: a static, self-contained HTML report (one folder:
 //! `index.html` plus the images it shows, copied beside it) of every reproduced
 //! experiment under DIR: the machine and commit, the tables of `summary.md` (surface
-//! errors beside the costs, volume errors in a table of their own), the plots,
+//! errors beside the costs, volume errors in a table of their own), the figures the
+//! experiment declares (images, notes, tables), the plots,
 //! and per run the composite, the error map and the fill-rate heatmap (both with their
 //! colour bars). No script, stylesheet or font is fetched from anywhere; a tiny inline
 //! script only marks, for automated checks, whether every image loaded.
@@ -228,6 +229,7 @@ fn experiment_section(html: &mut String, dir: &Path, out: &Path) -> Result<()> {
             esc(&s.missing_references.join(", "))
         );
     }
+    figures_section(html, &s, dir, out)?;
     let mut groups: Vec<&str> = Vec::new();
     for r in &s.runs {
         if !groups.contains(&r.group.as_str()) {
@@ -319,6 +321,50 @@ fn experiment_section(html: &mut String, dir: &Path, out: &Path) -> Result<()> {
         html.push_str("</div>\n");
     }
     html.push_str("</div>\n");
+    Ok(())
+}
+
+/// The experiment's declared figures: title, caption, image, notes and table.
+fn figures_section(html: &mut String, s: &Summary, dir: &Path, out: &Path) -> Result<()> {
+    if s.figures.is_empty() {
+        return Ok(());
+    }
+    html.push_str("<h3>Figures</h3>\n");
+    for f in &s.figures {
+        let _ = writeln!(html, "<h4>{}</h4>", esc(&f.title));
+        if !f.caption.is_empty() {
+            let _ = writeln!(html, "<p>{}</p>", esc(&f.caption));
+        }
+        if let Some(file) = &f.file {
+            let from = dir.join(file);
+            if from.is_file() {
+                let rel = copy(&from, out, &format!("img/{}/{file}", s.experiment))?;
+                let _ = writeln!(html, "<img src=\"{}\" alt=\"{}\">", esc(&rel), esc(&f.name));
+            }
+        }
+        if !f.notes.is_empty() {
+            html.push_str("<ul class=meta>");
+            for n in &f.notes {
+                let _ = write!(html, "<li>{}</li>", esc(n));
+            }
+            html.push_str("</ul>\n");
+        }
+        if let Some(t) = &f.table {
+            html.push_str("<table><tr>");
+            for h in &t.head {
+                let _ = write!(html, "<th>{}</th>", esc(h));
+            }
+            html.push_str("</tr>\n");
+            for r in &t.rows {
+                html.push_str("<tr>");
+                for c in r {
+                    let _ = write!(html, "<td>{}</td>", esc(c));
+                }
+                html.push_str("</tr>\n");
+            }
+            html.push_str("</table>\n");
+        }
+    }
     Ok(())
 }
 

@@ -64,8 +64,9 @@ pub struct ReproduceArgs {
     /// Keep the EXR images of every run (by default only PNGs and result.json stay).
     #[arg(long)]
     pub keep_exr: bool,
-    /// Run nothing: rewrite summary.md, summary.json, bmf.json and plots/ of an earlier
-    /// reproduction in the output folder from its manifest and result files.
+    /// Run nothing: rewrite summary.md, summary.json, bmf.json, plots/ and figures/ of an
+    /// earlier reproduction in the output folder from its manifest and result files (also
+    /// after the experiment file changed only in its description, paper or figures).
     #[arg(long, conflicts_with = "shard")]
     pub summary_only: bool,
     /// Start over: remove the experiment folder's earlier runs, plots and summary first
@@ -88,6 +89,10 @@ pub struct Manifest {
     pub experiment: String,
     /// Hash of the experiment file's bytes.
     pub experiment_hash: String,
+    /// Hash of what its runs are made from ([`Experiment::runs_hash`]); absent in
+    /// manifests written before it existed.
+    #[serde(default)]
+    pub runs_hash: Option<String>,
     /// `--scale`.
     pub scale: f64,
     /// `[k, n]`; `[1, 1]` for an unsharded or merged folder.
@@ -162,15 +167,28 @@ pub fn reproduce(args: &ReproduceArgs) -> Result<Outcome> {
         if args.summary_only {
             let _lock = DirLock::take(&out)?;
             let manifest = read_manifest(&out)?;
-            if manifest.experiment_hash != e.hash || manifest.scale != args.scale {
+            let same_file = manifest.experiment_hash == e.hash;
+            // A file changed only in its description, paper or figures makes the same runs.
+            let same_runs = manifest.runs_hash.as_deref() == Some(e.runs_hash.as_str());
+            if !(same_file || same_runs) || manifest.scale != args.scale {
                 bail!(
-                    "{}: made from another version of {} or another --scale ({}); run it again",
+                    "{}: made from another version of {} (its runs, not only its description, paper or figures) or another --scale ({}); run it again",
                     out.join("manifest.json").display(),
                     e.file.display(),
                     manifest.scale
                 );
             }
-            let s = crate::summary::write_all(&out, e, &manifest)?;
+            let s = crate::summary::write_all(&out, e, &manifest, &args.references)?;
+            if !same_file {
+                // The summary is now the current file's: so is the manifest.
+                write_manifest(
+                    &out,
+                    &Manifest {
+                        experiment_hash: e.hash.clone(),
+                        ..manifest
+                    },
+                )?;
+            }
             outcome.failed += s.failed;
             eprintln!("{}: summary rewritten", out.join("summary.md").display());
             outcome.dirs.push(out);
@@ -307,6 +325,7 @@ fn reproduce_one(
         schema_version: MANIFEST_VERSION,
         experiment: e.def.name.clone(),
         experiment_hash: e.hash.clone(),
+        runs_hash: Some(e.runs_hash.clone()),
         scale: args.scale,
         shard: [k, n],
         merged_from: Vec::new(),
@@ -315,7 +334,7 @@ fn reproduce_one(
         rendered_references: rendered,
     };
     // The manifest last: a folder with one is finished.
-    let summary = crate::summary::write_all(out, e, &manifest)?;
+    let summary = crate::summary::write_all(out, e, &manifest, &args.references)?;
     write_manifest(out, &manifest)?;
     eprintln!(
         "{}: {} done, {} skipped, {} failed in {:.1} s; summary in {}",
@@ -606,7 +625,7 @@ pub fn merge(args: &MergeArgs) -> Result<PathBuf> {
         // writes) is redone; anything else is not merge's to replace.
         let interrupted = !entries.iter().any(|n| n == "manifest.json")
             && entries.iter().all(|n| {
-                ["runs", "plots"].contains(&n.as_str())
+                ["runs", "plots", "figures"].contains(&n.as_str())
                     || crate::resume::SUMMARY_FILES.contains(&n.as_str())
                     || crate::resume::temp_file_pid(n).is_some()
             });
@@ -661,6 +680,7 @@ pub fn merge(args: &MergeArgs) -> Result<PathBuf> {
         schema_version: MANIFEST_VERSION,
         experiment: first.experiment.clone(),
         experiment_hash: first.experiment_hash.clone(),
+        runs_hash: Some(e.runs_hash.clone()),
         scale: first.scale,
         shard: [1, 1],
         merged_from: ks.into_iter().collect(),
@@ -669,7 +689,12 @@ pub fn merge(args: &MergeArgs) -> Result<PathBuf> {
         rendered_references: union(|m| &m.rendered_references),
     };
     // The manifest last: a folder with one is a finished merge.
-    crate::summary::write_all(&args.out, &e, &manifest)?;
+    crate::summary::write_all(
+        &args.out,
+        &e,
+        &manifest,
+        Path::new(crate::references::DEFAULT_ROOT),
+    )?;
     write_manifest(&args.out, &manifest)?;
     Ok(args.out.clone())
 }

@@ -344,10 +344,10 @@ impl Drop for DirLock {
     }
 }
 
-/// Removes what `reproduce` wrote into an experiment folder (`runs/`, `plots/` and
+/// Removes what `reproduce` wrote into an experiment folder (`runs/`, `plots/`, `figures/` and
 /// [`SUMMARY_FILES`]), for `--fresh`; other files stay.
 pub fn clear_outputs(out: &Path) -> Result<()> {
-    for d in ["runs", "plots"] {
+    for d in ["runs", "plots", "figures"] {
         let p = out.join(d);
         if p.is_dir() {
             std::fs::remove_dir_all(&p).with_context(|| format!("removing {}", p.display()))?;

@@ -294,6 +294,13 @@ pub fn run_scene(o: &RunOptions, scene: Scene) -> Result<RunOutcome> {
     write_exr("direct.exr", &direct)?;
     caustics_metrics::write_png(&dir.join("composite.png"), &tone.apply(&composite))?;
     images.insert("composite".into(), "composite.png".into());
+    // The caustic alone (surface + volume) at the composite's exposure: what figures put
+    // beside the reference's caustic.
+    caustics_metrics::write_png(
+        &dir.join("caustic.png"),
+        &tone.apply(&surface.add(&volume)?),
+    )?;
+    images.insert("caustic".into(), "caustic.png".into());
     if fragments.is_some() || fill.iter().any(|&c| c > 0) {
         let heat = caustics_metrics::heatmap(&fill, w, h, &format!("{} fragments/px", o.method))?;
         caustics_metrics::write_png(&dir.join("fill_heatmap.png"), &heat)?;

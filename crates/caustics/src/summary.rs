@@ -44,6 +44,9 @@ pub struct Summary {
     pub missing_references: Vec<String>,
     /// One row per run, in experiment order.
     pub runs: Vec<Row>,
+    /// The figures the experiment declares, as drawn (`figures/`).
+    #[serde(default)]
+    pub figures: Vec<crate::figures::DrawnFigure>,
 }
 
 /// The paper a table compares with.
@@ -143,6 +146,12 @@ pub struct Row {
     pub reference_noise_rms: Option<f64>,
     /// The paper's figures for this run.
     pub paper: Vec<PaperValue>,
+    /// GPU ms of every timed pass (`<owner>/<pass>`), for figures' `pass:` measures.
+    #[serde(default)]
+    pub pass_gpu_ms: BTreeMap<String, Spread>,
+    /// Fragment-shader invocations of every pass in the count frame.
+    #[serde(default)]
+    pub pass_fragments: BTreeMap<String, u64>,
 }
 
 /// A number from the paper beside a run.
@@ -157,34 +166,54 @@ pub struct PaperValue {
     pub note: String,
 }
 
-/// The figures of one [`caustics_metrics::Errors`] by measure name, headline first
-/// (energy, then shape), the RMSE and best-scale diagnostics last.
+/// The names of [`error_figures`], in its order.
+pub const ERROR_FIGURES: [&str; 12] = [
+    "flux_ratio",
+    "flux_ratio_image",
+    "rel_mse",
+    "rel_mse_after_flux",
+    "hdr_flip",
+    "hdr_flip_after_flux",
+    "flip",
+    "rmse",
+    "best_scale",
+    "rmse_after_best_scale",
+    "rel_mse_after_best_scale",
+    "flip_after_best_scale",
+];
+
+/// The figures of one [`caustics_metrics::Errors`] by measure name ([`ERROR_FIGURES`]),
+/// headline first (energy, then shape), the RMSE and best-scale diagnostics last.
 pub fn error_figures(e: &caustics_metrics::Errors) -> [(&'static str, Option<f64>); 12] {
-    [
-        ("flux_ratio", e.flux_ratio),
-        ("flux_ratio_image", e.flux_ratio_image),
-        ("rel_mse", Some(e.rel_mse)),
-        ("rel_mse_after_flux", e.rel_mse_after_flux),
-        ("hdr_flip", e.hdr_flip),
-        ("hdr_flip_after_flux", e.hdr_flip_after_flux),
-        ("flip", Some(e.flip)),
-        ("rmse", Some(e.rmse)),
-        ("best_scale", Some(e.best_scale)),
-        ("rmse_after_best_scale", Some(e.rmse_after_best_scale)),
-        ("rel_mse_after_best_scale", e.rel_mse_after_best_scale),
-        ("flip_after_best_scale", e.flip_after_best_scale),
-    ]
+    let values = [
+        e.flux_ratio,
+        e.flux_ratio_image,
+        Some(e.rel_mse),
+        e.rel_mse_after_flux,
+        e.hdr_flip,
+        e.hdr_flip_after_flux,
+        Some(e.flip),
+        Some(e.rmse),
+        Some(e.best_scale),
+        Some(e.rmse_after_best_scale),
+        e.rel_mse_after_best_scale,
+        e.flip_after_best_scale,
+    ];
+    std::array::from_fn(|i| (ERROR_FIGURES[i], values[i]))
 }
 
 impl Row {
     /// The measured value of a paper measure, if this run has it: the timing and count
-    /// measures, `counter:<name>`, or any error measure of [`Row::error_measures`].
+    /// measures (`fill_fragments`, `fill_max`: the fill counts), `counter:<name>`, or any
+    /// error measure of [`Row::error_measures`].
     pub fn measure(&self, measure: &str) -> Option<f64> {
         match measure {
             "method_gpu_ms" => self.method_gpu_ms.map(|s| s.median),
             "frame_gpu_ms" => self.frame_gpu_ms.map(|s| s.median),
             "fps" => self.frame_gpu_ms.map(|s| 1000.0 / s.median),
             "fragments" => self.fragments.map(|f| f as f64),
+            "fill_fragments" => self.fill_total.map(|f| f as f64),
+            "fill_max" => self.fill_max.map(f64::from),
             m => match m.strip_prefix("counter:") {
                 Some(c) => self.counters.get(c).map(|&v| v as f64),
                 None => self
@@ -340,6 +369,26 @@ pub fn build(out: &Path, e: &Experiment, m: &Manifest) -> Result<Summary> {
                     .and_then(|e| e.reference_noise_rms)
             }),
             paper,
+            pass_gpu_ms: result
+                .as_ref()
+                .map(|r| {
+                    r.timing
+                        .passes
+                        .iter()
+                        .filter_map(|p| Some((p.name.clone(), Spread::from(p.gpu_ms.as_ref()?))))
+                        .collect()
+                })
+                .unwrap_or_default(),
+            pass_fragments: result
+                .as_ref()
+                .and_then(|r| r.fragments.as_ref())
+                .map(|f| {
+                    f.passes
+                        .iter()
+                        .map(|p| (p.name.clone(), p.fragment_shader_invocations))
+                        .collect()
+                })
+                .unwrap_or_default(),
         });
     }
     let distinct = |mut v: Vec<String>| {
@@ -365,12 +414,16 @@ pub fn build(out: &Path, e: &Experiment, m: &Manifest) -> Result<Summary> {
         failed: count("failed"),
         missing_references: m.missing_references.clone(),
         runs: rows,
+        figures: Vec::new(),
     })
 }
 
-/// Writes `summary.json`, `summary.md`, `bmf.json` and `plots/` into `out`.
-pub fn write_all(out: &Path, e: &Experiment, m: &Manifest) -> Result<Summary> {
-    let s = build(out, e, m)?;
+/// Writes `summary.json`, `summary.md`, `bmf.json`, `plots/` and the experiment's
+/// declared `figures/` into `out`; `references` is the reference cache the figures'
+/// reference columns come from.
+pub fn write_all(out: &Path, e: &Experiment, m: &Manifest, references: &Path) -> Result<Summary> {
+    let mut s = build(out, e, m)?;
+    s.figures = crate::figures::draw(out, e, &s, references)?;
     let plots = crate::plots::write_plots(&out.join("plots"), &s)?;
     caustics_metrics::atomic_write(&out.join("summary.json"), &serde_json::to_vec_pretty(&s)?)?;
     caustics_metrics::atomic_write(&out.join("bmf.json"), &serde_json::to_vec_pretty(&bmf(&s))?)?;
@@ -608,6 +661,7 @@ pub fn markdown(s: &Summary, plots: &[String]) -> String {
             s.missing_references.join(", ")
         );
     }
+    md.push_str(&crate::figures::markdown(&s.figures));
     let paper_col = s
         .paper
         .as_ref()
@@ -768,6 +822,8 @@ pub(crate) fn test_row(method: &str) -> Row {
         fill_max: None,
         reference_noise_rms: None,
         paper: vec![],
+        pass_gpu_ms: Default::default(),
+        pass_fragments: Default::default(),
     }
 }
 
@@ -811,6 +867,7 @@ mod tests {
             failed: 0,
             missing_references: vec![],
             runs,
+            figures: vec![],
         }
     }
 

@@ -208,3 +208,241 @@ fn names_shards_and_slugs() {
     m.insert("a".into(), serde_json::json!(0.5));
     assert_eq!(slug(&m), "a=0.5,b=x_y");
 }
+
+/// An experiment on ring with pinhole (samples × sampling) and a `figures` list.
+fn with_figures(figures: &str) -> String {
+    format!(
+        r#"{{"name": "x", "runs": [{{"label": "sweep", "scenes": ["ring"], "methods": ["pinhole"],
+            "params": {{"samples": [100, 1000], "sampling": ["grid", "random"]}}}}],
+            "figures": [{figures}]}}"#
+    )
+}
+
+#[test]
+fn declared_figures_load_with_their_keys_and_measures() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let p = write(
+        dir.path(),
+        "x",
+        &with_figures(
+            r#"{"name": "grid", "kind": "image_grid", "rows": "param:sampling", "cols": "param:samples", "reference": true},
+               {"name": "time", "kind": "line", "x": "counter:sample_pixel_pairs", "y": "pass:gather+prepare_samples",
+                "series": ["param:sampling"], "fit": "linear"},
+               {"name": "rel", "kind": "line", "x": "param:samples", "y": "hdr_flip", "series": "param:sampling",
+                "relative_to": {"params": {"sampling": "grid", "samples": 1000}}},
+               {"name": "ratio", "kind": "ratio", "of": "param:sampling", "numerator": "random", "denominator": "grid",
+                "measures": ["method_gpu_ms", "volume_rel_mse_1spp", "counter:texture_fetches"]},
+               {"name": "t", "kind": "table", "where": [{"params": {"samples": 100}}, {"params": {"filtering": ["full", "off"]}}],
+                "columns": ["param:filtering", "fill_max", "pass_fragments:gather", "rel_mse_aliasing"]}"#,
+        ),
+    );
+    let e = Experiment::load(&p, 1.0).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(e.figures.len(), 5);
+    assert_eq!(e.figures[0].kind.name(), "image_grid");
+    assert_eq!(e.figures[3].title, "param:sampling: random / grid");
+}
+
+#[test]
+fn bad_figures_name_the_file_the_field_and_what_was_expected() {
+    let cases: &[(&str, &[&str])] = &[
+        (
+            r#"{"name": "a", "kind": "pie"}"#,
+            &[
+                "figures[0].kind",
+                "image_grid, line, ratio, table",
+                "\"pie\"",
+            ],
+        ),
+        (
+            r#"{"name": "a", "kind": "image_grid", "rows": "param:samplse"}"#,
+            &[
+                "figures[0].rows",
+                "\"samplse\" is not a parameter of pinhole",
+            ],
+        ),
+        (
+            r#"{"name": "a", "kind": "image_grid", "rows": "colour"}"#,
+            &["figures[0].rows", "param:<name>", "\"colour\""],
+        ),
+        (
+            r#"{"name": "a", "kind": "table", "where": {"params": {"samplse": 1}}, "columns": ["fps"]}"#,
+            &[
+                "figures[0].where.params.samplse",
+                "not a parameter",
+                "pinhole: ",
+            ],
+        ),
+        (
+            r#"{"name": "a", "kind": "table", "where": {"params": {"samples": 7}}, "columns": ["fps"]}"#,
+            &["figures[0].where", "matches no run"],
+        ),
+        (
+            r#"{"name": "a", "kind": "table", "where": [{"scene": "ring"}, {"scene": "rign"}], "columns": ["fps"]}"#,
+            &["figures[0].where[1].scene", "\"rign\"", "ring"],
+        ),
+        (
+            r#"{"name": "a", "kind": "table", "where": {"sceen": "ring"}, "columns": ["fps"]}"#,
+            &[
+                "figures[0].where.sceen",
+                "unknown field",
+                "group, scene, method and params",
+            ],
+        ),
+        (
+            r#"{"name": "a", "kind": "table", "where": {"group": "swep"}, "columns": ["fps"]}"#,
+            &["figures[0].where.group", "\"swep\"", "sweep"],
+        ),
+        (
+            r#"{"name": "a", "kind": "line", "x": "param:samples", "y": "speed"}"#,
+            &["figures[0].y", "expected a measure", "\"speed\""],
+        ),
+        (
+            r#"{"name": "a", "kind": "line", "y": "fps"}"#,
+            &["figures[0].x", "required"],
+        ),
+        (
+            r#"{"name": "a", "kind": "line", "x": "param:sampling", "y": "fps"}"#,
+            &["figures[0].x", "param:sampling is not a number", "grid"],
+        ),
+        (
+            r#"{"name": "a", "kind": "line", "x": "fps", "y": "fps", "fit": "cubic"}"#,
+            &["figures[0].fit", "\"linear\"", "\"cubic\""],
+        ),
+        (
+            r#"{"name": "a", "kind": "line", "x": "fps", "y": "fps", "relative_to": {"params": {"samples": 3}}}"#,
+            &["figures[0].relative_to", "matches no run"],
+        ),
+        (
+            r#"{"name": "a", "kind": "image_grid", "fit": "linear"}"#,
+            &[
+                "figures[0].fit",
+                "not a field of kind \"image_grid\"",
+                "rows, cols, image, reference",
+            ],
+        ),
+        (
+            r#"{"name": "a", "kind": "image_grid", "cols": "param:samples"}"#,
+            &["figures[0]", "fall in one cell"],
+        ),
+        (
+            r#"{"name": "a", "kind": "image_grid", "image": "picture"}"#,
+            &["figures[0].image", "caustic, composite"],
+        ),
+        (
+            r#"{"name": "a", "kind": "image_grid", "image": "composite", "reference": true}"#,
+            &["figures[0].reference", "\"caustic\""],
+        ),
+        (
+            r#"{"name": "a", "kind": "ratio", "of": "param:sampling", "numerator": "random", "denominator": "quantized", "measures": ["fps"]}"#,
+            &[
+                "figures[0].denominator",
+                "no run of the figure has param:sampling = \"quantized\"",
+                "grid, random",
+            ],
+        ),
+        (
+            r#"{"name": "a", "kind": "ratio", "of": "param:samples", "numerator": 100, "denominator": 1000, "measures": []}"#,
+            &["figures[0].measures", "non-empty"],
+        ),
+        (
+            r#"{"name": "a", "kind": "ratio", "where": [{"params": {"samples": 100, "sampling": "grid"}}, {"params": {"samples": 1000, "sampling": "random"}}],
+                "of": "param:samples", "numerator": 100, "denominator": 1000, "measures": ["fps"]}"#,
+            &["figures[0]", "no pair of runs"],
+        ),
+        (
+            r#"{"name": "a", "kind": "table", "columns": []}"#,
+            &["figures[0].columns", "non-empty"],
+        ),
+        (
+            r#"{"name": "a b", "kind": "table", "columns": ["fps"]}"#,
+            &["figures[0].name", "letters, digits"],
+        ),
+        (
+            r#"{"name": "a", "kind": "table", "columns": ["fps"]}, {"name": "a", "kind": "table", "columns": ["fps"]}"#,
+            &["figures[1].name", "figures[0]"],
+        ),
+        (
+            r#"{"name": "a", "kind": "table", "columns": ["fps"], "colour": 1}"#,
+            &["figures[0]", "colour"],
+        ),
+    ];
+    for (figures, needles) in cases {
+        let json = with_figures(figures);
+        let e = load_err(&json);
+        for n in *needles {
+            assert!(e.contains(n), "{figures}\n-> {e}\n(missing {n:?})");
+        }
+    }
+    // A reference column needs one scene a row.
+    let e = load_err(
+        r#"{"name": "x", "runs": [{"scenes": ["ring", "sphere_on_plane"], "methods": ["pinhole"]}],
+            "figures": [{"name": "a", "kind": "image_grid", "reference": true}]}"#,
+    );
+    assert!(
+        e.contains("figures[0].reference") && e.contains("one scene a row"),
+        "{e}"
+    );
+    // relative_to must reach every scene the figure draws.
+    let e = load_err(
+        r#"{"name": "x", "runs": [{"scenes": ["ring", "sphere_on_plane"], "methods": ["pinhole"], "params": {"samples": [100, 1000]}}],
+            "figures": [{"name": "a", "kind": "line", "x": "param:samples", "y": "fps",
+                         "relative_to": {"scene": "ring", "params": {"samples": 100}}}]}"#,
+    );
+    assert!(
+        e.contains("figures[0].relative_to") && e.contains("sphere_on_plane"),
+        "{e}"
+    );
+}
+
+#[test]
+fn figures_description_and_paper_do_not_change_what_the_runs_are_made_from() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let load = |json: &str| {
+        let p = write(dir.path(), "x", json);
+        Experiment::load(&p, 1.0).unwrap_or_else(|e| panic!("{e}"))
+    };
+    let plain = load(&with_figures(
+        r#"{"name": "t", "kind": "table", "columns": ["fps"]}"#,
+    ));
+    let redrawn = load(
+        &with_figures(r#"{"name": "t2", "kind": "table", "columns": ["fps", "rel_mse"]}"#)
+            .replacen(
+                "{\"name\": \"x\",",
+                "{\"name\": \"x\", \"description\": \"new words\",",
+                1,
+            ),
+    );
+    assert_ne!(plain.hash, redrawn.hash);
+    assert_eq!(
+        plain.runs_hash, redrawn.runs_hash,
+        "a figure changed the runs"
+    );
+    let rerun = load(
+        &with_figures(r#"{"name": "t", "kind": "table", "columns": ["fps"]}"#).replacen(
+            "{\"name\": \"x\",",
+            "{\"name\": \"x\", \"frames\": 4,",
+            1,
+        ),
+    );
+    assert_ne!(
+        plain.runs_hash, rerun.runs_hash,
+        "frames did not change the runs"
+    );
+}
+
+#[test]
+fn the_readmes_copyable_example_loads() {
+    let readme = caustics::experiment::builtin_dir().join("README.md");
+    let text = std::fs::read_to_string(&readme).expect("README");
+    let block = text
+        .split("<!-- copyable-example -->")
+        .nth(1)
+        .and_then(|rest| rest.split("```json\n").nth(1))
+        .and_then(|rest| rest.split("\n```").next())
+        .expect("a ```json block after <!-- copyable-example -->");
+    let dir = tempfile::tempdir().expect("tempdir");
+    let p = write(dir.path(), "my-experiment", block);
+    let e = Experiment::load(&p, 1.0).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(e.runs.len(), 12);
+    assert_eq!(e.figures.len(), 5);
+}

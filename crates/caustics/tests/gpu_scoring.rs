@@ -1,14 +1,18 @@
-//! The scoring frame through `caustics run`: every method gives the same image for the
-//! same sub-pixel offset whatever it rendered before (so one offset at the pixel centre
-//! repeats the timed frame bit for bit), and a scored run stores the pixel-averaged and
-//! the 1-spp errors side by side. Runs on lavapipe on CI; without an adapter it fails
-//! with the install hint.
+//! The scored run of `caustics run` on the GPU: every method gives the same image for
+//! the same sub-pixel offset whatever it rendered before (so one offset at the pixel
+//! centre repeats the timed frame bit for bit); a scored run writes its files and pass
+//! times and stores the pixel-averaged and the 1-spp errors side by side; the errors
+//! against a reference (given, or found in the cache by scene hash) say "identical" for
+//! the image itself and tell scale from shape; a reference of the wrong size is refused
+//! before any write. Runs on lavapipe on CI; without an adapter it fails with the install
+//! hint. (Each method's accuracy is tested in its own crate, `tests/accuracy.rs`.)
 
 mod common;
 
 use caustics::reference_cmd::{ReferenceArgs, reference};
 use caustics::result::RunResult;
-use caustics_metrics::read_exr;
+use caustics::run::run;
+use caustics_metrics::{HdrImage, read_exr};
 use common::{run_dir, run_options, small_scene};
 
 #[test]
@@ -67,8 +71,32 @@ fn a_scored_run_keeps_pixel_averaged_and_1spp_errors_side_by_side() {
     .expect("reference");
     let mut o = run_options(&scene, &tmp.path().join("runs"), "wavefront", &[]);
     (o.score_grid, o.exposure, o.references) = (2, None, references);
+    (o.warmup, o.frames) = (1, 3);
     let (dir, result) = run_dir(&o);
     assert_eq!(result.schema_version, caustics::result::SCHEMA_VERSION);
+    for f in [
+        "result.json",
+        "surface.exr",
+        "direct.exr",
+        "composite.png",
+        "fill_heatmap.png",
+    ] {
+        assert!(dir.join(f).is_file(), "{f} missing in {}", dir.display());
+    }
+    // Timestamps: lavapipe has them, so every pass has a time in every measured frame,
+    // none rejected.
+    assert!(
+        result.timing.timestamps_available,
+        "adapter without timestamp queries"
+    );
+    assert_eq!(result.timing.rejected_timestamps, 0);
+    for p in &result.timing.passes {
+        let s = p
+            .gpu_ms
+            .as_ref()
+            .unwrap_or_else(|| panic!("no time for {}", p.name));
+        assert_eq!(s.samples, 3, "{}", p.name);
+    }
     let scoring = result.scoring.as_ref().expect("scoring info");
     assert_eq!((scoring.grid, scoring.samples_per_pixel), (2, 4));
     assert_eq!(result.tone_map.source.as_deref(), Some("reference p99"));
@@ -99,5 +127,130 @@ fn a_scored_run_keeps_pixel_averaged_and_1spp_errors_side_by_side() {
     assert_eq!(
         old.errors_1spp.as_ref().map(|e| e.surface),
         Some(scored.surface)
+    );
+}
+
+#[test]
+fn errors_against_a_reference_are_zero_for_itself_and_tell_scale_from_shape() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let scene = small_scene(tmp.path(), "water_pool", 128, 96);
+    let (dir, first) = run_dir(&run_options(
+        &scene,
+        &tmp.path().join("a"),
+        "wavefront",
+        &[],
+    ));
+    assert!(first.errors.is_none(), "no reference, no errors");
+    let surface = read_exr(&dir.join("surface.exr")).expect("surface.exr");
+
+    // The same image as its own reference: every comparator says "identical".
+    let same = tmp.path().join("same.exr");
+    caustics_metrics::write_exr(&same, &surface).expect("write reference");
+    let mut o = run_options(&scene, &tmp.path().join("b"), "wavefront", &[]);
+    o.reference = Some(same);
+    let (dir_b, r) = run_dir(&o);
+    let e = r.errors.expect("errors with a reference").surface;
+    assert_eq!(e.rmse, 0.0, "runs are deterministic on one adapter");
+    assert_eq!(e.flip, 0.0);
+    assert!((e.ssim - 1.0).abs() < 1e-9, "{}", e.ssim);
+    assert!(dir_b.join("error.png").is_file());
+
+    // Twice as bright a reference: a pure normalization error, which the best
+    // scale explains fully.
+    let double = tmp.path().join("double.exr");
+    caustics_metrics::write_exr(&double, &surface.scaled(2.0)).expect("write reference");
+    o.reference = Some(double);
+    o.out = tmp.path().join("c");
+    let e = run_dir(&o).1.errors.expect("errors").surface;
+    assert!(e.rmse > 0.0 && e.flip > 0.0);
+    assert!(
+        (e.best_scale - 2.0).abs() < 1e-4,
+        "best scale {}",
+        e.best_scale
+    );
+    assert!(
+        e.rmse_after_best_scale < 1e-4 * e.rmse,
+        "{} vs {}",
+        e.rmse_after_best_scale,
+        e.rmse
+    );
+}
+
+#[test]
+fn a_reference_of_the_wrong_size_is_refused_before_any_write() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let scene = small_scene(tmp.path(), "water_pool", 64, 48);
+    let reference = tmp.path().join("small.exr");
+    caustics_metrics::write_exr(&reference, &HdrImage::new(32, 24)).expect("write");
+    let out = tmp.path().join("out");
+    let mut o = run_options(&scene, &out, "wavefront", &[]);
+    o.reference = Some(reference);
+    let e = run(&o).expect_err("size mismatch").to_string();
+    assert!(
+        e.contains("expected a 64x48 image") && e.contains("got 32x24"),
+        "{e}"
+    );
+    assert!(!out.exists(), "nothing may be written");
+}
+
+#[test]
+fn a_cached_reference_is_found_by_scene_hash_and_used() {
+    use caustics::references::{ReferenceMeta, cache_dir, find};
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let path = small_scene(tmp.path(), "water_pool", 64, 48);
+    let scene = caustics_scene::Scene::load(&path).expect("scene");
+    let root = tmp.path().join("refs");
+    assert!(find(&root, &scene).expect("empty cache").is_none());
+
+    // A reference of all-ones radiance with a known standard error.
+    let dir = cache_dir(&root, &scene);
+    std::fs::create_dir_all(&dir).expect("mkdir");
+    let mut ones = HdrImage::new(64, 48);
+    ones.pixels.iter_mut().for_each(|p| *p = [1.0; 3]);
+    caustics_metrics::write_exr(&dir.join("caustic.exr"), &ones).expect("write");
+    caustics_metrics::write_exr(&dir.join("stderr.exr"), &ones.scaled(0.01)).expect("write");
+    let meta = ReferenceMeta {
+        schema_version: 1,
+        scene: scene.name.clone(),
+        scene_hash: scene.hash_hex(),
+        width: 64,
+        height: 48,
+        photons: 1000,
+        seconds: 1.0,
+        photons_per_second: 1000.0,
+        seed: 1,
+        batches: 16,
+        commit: "test".into(),
+        relative_stderr: 0.01,
+    };
+    std::fs::write(
+        dir.join("meta.json"),
+        serde_json::to_vec(&meta).expect("json"),
+    )
+    .expect("write");
+
+    let mut o = run_options(&path, &tmp.path().join("out"), "wavefront", &[]);
+    o.references = root.clone();
+    let (_, r) = run_dir(&o);
+    let e = r.errors.expect("the cached reference is used");
+    assert_eq!(e.reference_source, "cache");
+    assert!(e.reference.ends_with("caustic.exr"), "{}", e.reference);
+    let noise = e
+        .reference_noise_rms
+        .expect("stderr.exr beside the reference");
+    assert!((noise - 0.01).abs() < 1e-6, "{noise}");
+
+    // A meta.json that does not match the scene is an error, not a silent miss.
+    let mut stale = meta.clone();
+    stale.scene_hash = "0000000000000000".into();
+    std::fs::write(
+        dir.join("meta.json"),
+        serde_json::to_vec(&stale).expect("json"),
+    )
+    .expect("write");
+    let err = run(&o).expect_err("stale cache").to_string();
+    assert!(
+        err.contains("meta.json") && err.contains("0000000000000000"),
+        "{err}"
     );
 }

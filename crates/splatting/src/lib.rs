@@ -9,7 +9,7 @@
 //! area the kernel covers (`splat.wgsl`), so the energy is conserved whatever the
 //! kernel. A small kernel leaves the dots of individual photons, a large one blurs the
 //! caustic: the paper's argument that no single splat size fits an uneven photon
-//! density, which `--example fig1` of `caustic-triangles`' results measures as a sweep.
+//! density, which the `umenhoffer-fig1` experiment of `caustics reproduce` sweeps.
 //!
 //! Passes (names `splatting/<pass>`): `light_gbuffer`, `distance_maps`,
 //! `trace_photons`, `splat` (raster, all six faces in one pass), `camera_lookup`.

@@ -1,12 +1,13 @@
-//! Helpers shared by the harness's GPU test files (each file is its own crate and
-//! uses a subset, hence the `dead_code` allowance).
+//! Helpers of the harness's GPU test files: a small copy of a built-in scene and the
+//! cheapest `caustics run` of it. (The methods' accuracy tests live in their own crates
+//! and use `caustics-testing` instead.) A file that uses a subset is its own crate,
+//! hence the `dead_code` allowance.
 #![allow(dead_code)]
 
 use std::path::{Path, PathBuf};
 
 use caustics::result::RunResult;
 use caustics::run::{RunOptions, RunOutcome, run};
-use caustics_metrics::{HdrImage, read_exr};
 
 /// Writes `json` as `<dir>/<name>.json`.
 pub(crate) fn write_scene(dir: &Path, name: &str, json: &serde_json::Value) -> PathBuf {
@@ -52,12 +53,4 @@ pub(crate) fn run_dir(o: &RunOptions) -> (PathBuf, RunResult) {
         RunOutcome::Done { dir, result } => (dir, *result),
         RunOutcome::Skipped { reason } => panic!("unexpectedly skipped: {reason}"),
     }
-}
-
-/// Runs and returns the (finite) surface caustic image.
-pub(crate) fn run_surface(o: &RunOptions) -> (HdrImage, RunResult) {
-    let (dir, result) = run_dir(o);
-    let surface = read_exr(&dir.join("surface.exr")).expect("surface.exr");
-    surface.check_finite("surface").expect("finite caustic");
-    (surface, result)
 }

@@ -1,0 +1,335 @@
+//! `caustic-triangles` (Umenhoffer, Patow & Szirmay-Kalos) on the GPU, on whatever
+//! adapter the machine has (lavapipe on CI; without an adapter these fail with the
+//! install hint, never skip): the analytic irradiance of the triangles' vertices under a
+//! flat refractor and a flat mirror, the CPU reference on a refracting sphere, the
+//! distance test against light leaks, determinism. Small images, photon images and cube
+//! maps keep them fast.
+
+use caustic_triangles::photon_hits::PhotonHitConfig;
+use caustic_triangles::{CausticTriangles, CausticTrianglesParams};
+use caustics_gpu::RendererOptions;
+use caustics_scene::{Scene, Vec3};
+use caustics_testing::{
+    Bounds, Gpu, HdrImage, Measured, TEST_REFERENCE, artifacts, builtin, compare, plane_hit, scene,
+};
+
+/// Small settings shared by the tests: 48² photon image, 128² cube faces.
+fn small(extra: serde_json::Value) -> serde_json::Value {
+    let mut p = serde_json::json!({"resolution": 48, "cube_size": 128, "distance_map_size": 128});
+    if let (Some(p), Some(extra)) = (p.as_object_mut(), extra.as_object()) {
+        p.extend(extra.clone());
+    }
+    p
+}
+
+/// Renders `scene` through the registry entry: the measured frames and the image.
+fn run(scene: Scene, params: serde_json::Value) -> (HdrImage, Measured) {
+    let gpu = Gpu::new(scene);
+    let mut method = gpu.method(
+        &caustics_method::registry_entry::<caustic_triangles::CausticTriangles>(),
+        params,
+    );
+    let measured = gpu.measure(method.as_mut(), 0, 1);
+    (gpu.surface(), measured)
+}
+
+/// The uploaded scene with small shadow maps, and the method built directly (these
+/// tests read its photon hits and vertex irradiance back), after one frame.
+fn run_concrete(scene: Scene, params: &CausticTrianglesParams) -> (Gpu, CausticTriangles) {
+    let options = RendererOptions {
+        shadow_resolution: 256,
+        cube_shadow_resolution: 128,
+    };
+    let gpu = Gpu::with_options(scene, options);
+    let mut m = CausticTriangles::new(&gpu.ctx, &gpu.renderer, params).expect("method");
+    gpu.frame(&mut m);
+    (gpu, m)
+}
+
+/// A 1 m glass slab surface (an open refractor, one interface) 1 m above a diffuse
+/// floor, under a slanted directional light; the camera sits below the slab, so it sees
+/// the floor directly.
+fn flat_refractor_scene(direction: [f64; 3], irradiance: [f64; 3]) -> Scene {
+    scene(&serde_json::json!({
+        "name": "flat_refractor",
+        "description": "a flat glass surface over a floor: the analytic check of the photon-hit methods",
+        "camera": {"eye": [0, 0.6, 2.2], "target": [0.2, 0, 0], "up": [0, 1, 0], "fov_y_deg": 50, "width": 64, "height": 64},
+        "lights": [{"type": "directional", "direction": direction, "irradiance": irradiance}],
+        "materials": {
+            "glass": {"type": "dielectric", "ior": 1.5},
+            "floor": {"type": "diffuse", "albedo": [0.8, 0.6, 0.4]}
+        },
+        "objects": [
+            {"shape": {"type": "quad", "center": [0, 1, 0], "normal": [0, 1, 0], "size": [1, 1]}, "material": "glass"},
+            {"shape": {"type": "quad", "center": [0, 0, 0], "normal": [0, 1, 0], "size": [6, 6]}, "material": "floor"}
+        ]
+    }))
+}
+
+/// Exact unpolarized Fresnel reflectance (DESIGN "Conventions"), eta = n_i / n_t.
+fn fresnel(cos_i: f64, eta: f64) -> f64 {
+    let sin2_t = eta * eta * (1.0 - cos_i * cos_i);
+    let cos_t = (1.0 - sin2_t).sqrt();
+    let rs = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
+    let rp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
+    0.5 * (rs * rs + rp * rp)
+}
+
+/// (interior vertices checked, worst relative error of their irradiance against `want`):
+/// interior vertices only, all eight neighbours valid, a full fan of six triangles.
+fn interior_vertex_error(
+    gpu: &Gpu,
+    m: &CausticTriangles,
+    n: usize,
+    want: [f64; 3],
+) -> (usize, f64) {
+    let hits = m.photon_hits().read_hits(&gpu.ctx).expect("hits");
+    let e_v = m
+        .read_vertex_irradiance(&gpu.ctx)
+        .expect("vertex irradiance");
+    let valid = |x: usize, y: usize| hits[y * n + x].valid();
+    let (mut checked, mut worst) = (0, 0.0f64);
+    for y in 1..n - 1 {
+        for x in 1..n - 1 {
+            if !(y - 1..=y + 1).all(|j| (x - 1..=x + 1).all(|i| valid(i, j))) {
+                continue;
+            }
+            for c in 0..3 {
+                worst = worst.max((e_v[y * n + x][c] as f64 - want[c]).abs() / want[c]);
+            }
+            checked += 1;
+        }
+    }
+    (checked, worst)
+}
+
+#[test]
+fn flat_refractor_vertices_carry_the_analytic_irradiance() {
+    let irradiance = [1.0f64, 2.0, 0.5];
+    let d = Vec3::new(0.4, -1.0, 0.2).normalize();
+    let params = CausticTrianglesParams {
+        hits: PhotonHitConfig {
+            resolution: 40,
+            cube_size: 256,
+            distance_map_size: 512,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let (gpu, m) = run_concrete(
+        flat_refractor_scene([d.x as f64, d.y as f64, d.z as f64], irradiance),
+        &params,
+    );
+    // A parallel beam through a flat interface onto a parallel floor keeps its
+    // footprint: E_floor = T(θ) · E · cos θ.
+    let cos_i = -d.y as f64;
+    let t = 1.0 - fresnel(cos_i, 1.0 / 1.5);
+    let want = irradiance.map(|e| t * e * cos_i);
+    let (checked, worst) = interior_vertex_error(&gpu, &m, params.hits.resolution as usize, want);
+    eprintln!("flat refractor: {checked} interior vertices, worst relative error {worst:.2e}");
+    assert!(checked > 400, "only {checked} interior vertices");
+    // The hits come from the receivers' distance map (secant search on a 512² map),
+    // whose landing points are off by a fraction of a millimetre: cell areas of
+    // ~2.5 cm on a side move by well under 1 %.
+    assert!(worst < 0.01, "worst vertex irradiance error {worst}");
+
+    // The camera image in the middle of the lit patch: ρ/π · E.
+    let surface = gpu.surface();
+    let mut expected = surface.clone();
+    let albedo = [0.8f64, 0.6, 0.4];
+    let (mut px, mut worst_px) = (0, 0.0f64);
+    let camera = &gpu.scene().camera;
+    // The lit patch is the slab's 1 m square shifted along the refracted ray.
+    let shift = {
+        let sin_t = (1.0 - cos_i * cos_i).sqrt() / 1.5;
+        sin_t / (1.0 - sin_t * sin_t).sqrt()
+    };
+    let h = Vec3::new(d.x, 0.0, d.z).normalize() * shift as f32;
+    for j in 0..64u32 {
+        for i in 0..64u32 {
+            let Some(p) = plane_hit(camera, i, j, 0.0) else {
+                continue;
+            };
+            let q = p - h;
+            if q.x.abs() > 0.4 || q.z.abs() > 0.4 {
+                continue;
+            }
+            let want =
+                [0, 1, 2].map(|c| albedo[c] / std::f64::consts::PI * t * irradiance[c] * cos_i);
+            for (got, want) in surface.get(i, j).iter().zip(want) {
+                worst_px = worst_px.max((*got as f64 - want).abs() / want);
+            }
+            expected.set(i, j, want.map(|w| w as f32));
+            px += 1;
+        }
+    }
+    eprintln!("flat refractor: {px} pixels, worst relative error {worst_px:.2e}");
+    assert!(px > 150, "only {px} pixels inside the lit patch");
+    // 1 %: the vertices' bound carries over, the lookup interpolating between them.
+    artifacts!().ensure(worst_px < 0.01, "surface", &surface, &expected, || {
+        format!("worst pixel radiance error {worst_px}")
+    });
+}
+
+#[test]
+fn flat_mirror_vertices_carry_the_reflected_irradiance() {
+    // A 45° mirror 1 m above the floor turns a light travelling along +x straight down:
+    // the beam keeps its cross-section, so E_floor = R · E on every interior vertex.
+    let (irradiance, reflectance) = ([1.0f64, 2.0, 0.5], [0.9f64, 0.8, 0.7]);
+    let scene = scene(&serde_json::json!({
+        "name": "flat_mirror",
+        "description": "a 45° mirror over a floor: the reflection check of the photon-hit methods",
+        "camera": {"eye": [0, 0.5, 2], "target": [0, 0, 0], "up": [0, 1, 0], "fov_y_deg": 50, "width": 64, "height": 48},
+        "lights": [{"type": "directional", "direction": [1, 0, 0], "irradiance": irradiance}],
+        "materials": {
+            "mirror": {"type": "mirror", "reflectance": reflectance},
+            "floor": {"type": "diffuse", "albedo": [0.8, 0.8, 0.8]}
+        },
+        "objects": [
+            {"shape": {"type": "quad", "center": [0, 1, 0], "normal": [-1, -1, 0], "size": [0.5, 0.5]}, "material": "mirror"},
+            {"shape": {"type": "quad", "center": [0, 0, 0], "normal": [0, 1, 0], "size": [6, 6]}, "material": "floor"}
+        ]
+    }));
+    let params = CausticTrianglesParams {
+        hits: PhotonHitConfig {
+            resolution: 40,
+            cube_size: 256,
+            distance_map_size: 512,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let (gpu, m) = run_concrete(scene, &params);
+    let want = [0, 1, 2].map(|c| reflectance[c] * irradiance[c]);
+    let (checked, worst) = interior_vertex_error(&gpu, &m, params.hits.resolution as usize, want);
+    eprintln!("flat mirror: {checked} interior vertices, worst relative error {worst:.2e}");
+    assert!(checked > 300, "only {checked} interior vertices");
+    // 1 %, for the reason of the flat refractor's bound.
+    assert!(worst < 0.01, "worst vertex irradiance error {worst}");
+}
+
+#[test]
+fn refracting_sphere_is_close_to_the_cpu_reference() {
+    let c = compare(
+        &caustics_method::registry_entry::<caustic_triangles::CausticTriangles>(),
+        builtin("sphere_on_plane", 96, 72),
+        serde_json::json!({}),
+        &TEST_REFERENCE,
+        4,
+    );
+    // Bounds a margin above lavapipe's figures at 96×72, 16 samples per pixel
+    // (flux 0.906, relMSE after flux 2.2e-4 (one pixel off: 6.6e-3), HDR-FLIP after flux 0.410):
+    // the method (like its paper) does not follow the light the glass sphere reflects (off
+    // its surface, and inside it), which the reference spreads as a dim halo around the
+    // focus (see the -expected image of a failure): that light is short in the flux and
+    // sets most of HDR-FLIP, whose brighter exposures show the halo (static-grid, which
+    // follows the reflection, scores 0.15 here).
+    // No flux above 1.02: light the method does not model cannot be there. The relMSE
+    // bound is about twice the figure and refuses the image moved by one pixel.
+    c.check(
+        &artifacts!(),
+        &Bounds {
+            flux: 0.85..1.02,
+            rel_mse_after_flux: 5e-4,
+            hdr_flip_after_flux: 0.46,
+        },
+    );
+}
+
+/// Pixels seeing the floor (y = -3) under the table of `light_leak`: hidden from the
+/// glass ball by the table, and out of reach of the light passing the table's edge (it
+/// diverges after the focus).
+fn occluded_floor_pixels(scene: &Scene) -> Vec<(u32, u32)> {
+    let cam = &scene.camera;
+    (0..cam.height)
+        .flat_map(|j| (0..cam.width).map(move |i| (i, j)))
+        .filter(|&(i, j)| {
+            plane_hit(cam, i, j, -3.0).is_some_and(|p| p.x.abs() < 0.7 && p.z.abs() < 0.7)
+        })
+        .collect()
+}
+
+#[test]
+fn distance_test_removes_the_light_leak_onto_an_occluded_receiver() {
+    let scene = builtin("light_leak", 64, 48);
+    let pixels = occluded_floor_pixels(&scene);
+    assert!(
+        pixels.len() > 30,
+        "only {} occluded floor pixels",
+        pixels.len()
+    );
+    let sum =
+        |img: &HdrImage| -> f64 { pixels.iter().map(|&(i, j)| img.get(i, j)[1] as f64).sum() };
+    let (with, _) = run(
+        scene.clone(),
+        small(serde_json::json!({"distance_test": true})),
+    );
+    let (without, _) = run(scene, small(serde_json::json!({"distance_test": false})));
+    eprintln!(
+        "caustic on the occluded floor {:.4} with the distance test, {:.4} without; whole image {:.4} / {:.4}",
+        sum(&with),
+        sum(&without),
+        with.sum_luminance(),
+        without.sum_luminance()
+    );
+    assert_eq!(sum(&with), 0.0, "light leaks despite the test");
+    assert!(
+        sum(&without) > 1.0,
+        "no leak without the test, the scene shows nothing"
+    );
+}
+
+#[test]
+fn counts_and_images_are_deterministic() {
+    let scene = builtin("ring", 64, 48);
+    let (a, ra) = run(scene.clone(), small(serde_json::json!({})));
+    let (b, rb) = run(scene, small(serde_json::json!({})));
+    assert_eq!(ra.counters, rb.counters);
+    assert!(ra.counter("photon_hits") > 100, "{:?}", ra.counters);
+    assert_eq!(ra.counter("photon_texels"), 48 * 48);
+    let fa = ra
+        .method_fragments("caustic-triangles")
+        .expect("pipeline statistics");
+    assert_eq!(Some(fa), rb.method_fragments("caustic-triangles"));
+    assert_eq!(a.pixels, b.pixels, "image differs between runs");
+    assert!(a.sum_luminance() > 0.0, "no caustic on the ring floor");
+    let names = ra.pass_names();
+    for pass in [
+        "light_gbuffer",
+        "distance_maps",
+        "trace_photons",
+        "camera_lookup",
+    ] {
+        let want = format!("caustic-triangles/{pass}");
+        assert!(
+            names.contains(&want.as_str()),
+            "{want} missing from {names:?}"
+        );
+    }
+}
+
+#[test]
+fn bad_parameters_and_unsupported_scenes_are_clear() {
+    // (The harness's cli test checks that a refused parameter writes nothing.)
+    let info = caustics_method::registry_entry::<caustic_triangles::CausticTriangles>();
+    for (param, needle) in [
+        (serde_json::json!({"resolution": 1}), "resolution"),
+        (serde_json::json!({"max_stretch": 0}), "max_stretch"),
+    ] {
+        let msg = (info.parse)(&param)
+            .expect_err(&param.to_string())
+            .to_string();
+        assert!(
+            msg.contains(needle) && msg.contains("caustic-triangles"),
+            "{param}: {msg}"
+        );
+    }
+    // Two specular objects: one photon hit image follows one generator.
+    let reason = info
+        .supports(
+            &builtin("sphere_over_water", 32, 24),
+            &(info.parse)(&small(serde_json::json!({}))).expect("valid parameters"),
+        )
+        .expect_err("sphere_over_water must be declined");
+    assert!(reason.0.contains("both specular"), "{}", reason.0);
+}

@@ -1,0 +1,276 @@
+//! `pinhole` (Wand & Straßer 2003) on the GPU, on whatever adapter the machine has
+//! (lavapipe on CI; without an adapter these fail with the install hint, never skip):
+//! the analytic irradiance under a small flat mirror, the CPU reference on a refracting
+//! sphere, filtering, seeds and counters on the ring. Small images and few samples keep
+//! them fast.
+
+use caustics_scene::Vec3;
+use caustics_testing::{
+    Bounds, Gpu, HdrImage, Measured, TEST_REFERENCE, artifacts, builtin, compare, plane_hit, scene,
+};
+
+/// Renders `scene` with pinhole and JSON `params`: the measured frames and the image.
+fn run(scene: caustics_scene::Scene, params: serde_json::Value) -> (HdrImage, Measured) {
+    let gpu = Gpu::new(scene);
+    let mut method = gpu.method(
+        &caustics_method::registry_entry::<pinhole::Pinhole>(),
+        params,
+    );
+    let measured = gpu.measure(method.as_mut(), 0, 1);
+    (gpu.surface(), measured)
+}
+
+/// A square mirror of side `mirror_size` at 45° one metre above a floor; a directional
+/// light of angular radius `light_angle` travelling along +x is reflected straight down.
+fn flat_mirror_scene(light: serde_json::Value, mirror_size: f64) -> caustics_scene::Scene {
+    scene(&serde_json::json!({
+        "name": "flat_mirror",
+        "description": "a small 45° mirror over a floor: the analytic check of pinhole",
+        "camera": {"eye": [0, 1.5, 3], "target": [0, 0, 0], "up": [0, 1, 0], "fov_y_deg": 30, "width": 64, "height": 48},
+        "lights": [light],
+        "materials": {
+            "mirror": {"type": "mirror", "reflectance": [0.9, 0.8, 0.7]},
+            "floor": {"type": "diffuse", "albedo": [0.8, 0.6, 0.4]}
+        },
+        "objects": [
+            {"shape": {"type": "quad", "center": [0, 1, 0], "normal": [-1, -1, 0], "size": [mirror_size, mirror_size]}, "material": "mirror"},
+            {"shape": {"type": "quad", "center": [0, 0, 0], "normal": [0, 1, 0], "size": [4, 4]}, "material": "floor"}
+        ]
+    }))
+}
+
+#[test]
+fn one_sample_on_a_flat_mirror_gives_the_analytic_reflected_irradiance() {
+    let (irradiance, reflectance, albedo) =
+        ([1.0f64, 2.0, 0.5], [0.9f64, 0.8, 0.7], [0.8f64, 0.6, 0.4]);
+    let alpha = 0.2f64;
+    let light = serde_json::json!({"type": "directional", "direction": [1, 0, 0], "irradiance": irradiance});
+    let side = 0.004f64;
+    let scene = flat_mirror_scene(light, side);
+    let camera = scene.camera.clone();
+    let n = Vec3::new(-1.0, -1.0, 0.0).normalize();
+    let (u, v) = caustics_scene::quad_axes(n);
+    let centre = Vec3::new(0.0, 1.0, 0.0);
+    // The light is a cone of half angle alpha with uniform radiance E / Omega.
+    let radiance: Vec<f64> = irradiance
+        .iter()
+        .map(|e| e / (std::f64::consts::TAU * (1.0 - alpha.cos())))
+        .collect();
+    for filtering in ["off", "full"] {
+        let (surface, measured) = run(
+            scene.clone(),
+            serde_json::json!({"samples": 1, "light_angle": alpha, "filtering": filtering}),
+        );
+        assert_eq!(measured.counter("samples"), 1);
+        let mut want_image = surface.clone();
+        let (mut checked, mut worst, mut at) = (0, 0.0f64, (0, 0, 0, 0.0));
+        for j in 0..surface.height {
+            for i in 0..surface.width {
+                let Some(x) = plane_hit(&camera, i, j, 0.0) else {
+                    continue;
+                };
+                // Well inside the light's image (radius ~0.2 m): the mirror sees the light
+                // at most 3/4 of its angular radius from the light's centre.
+                if x.length() > 0.15 {
+                    continue;
+                }
+                // Analytic: R L ∫ cos θ_s cos θ_x / d² dA over the mirror (20×20 midpoint rule).
+                let mut solid = 0.0f64;
+                let m = 20;
+                for a in 0..m {
+                    for b in 0..m {
+                        let s = ((a as f32 + 0.5) / m as f32 - 0.5) * side as f32;
+                        let t = ((b as f32 + 0.5) / m as f32 - 0.5) * side as f32;
+                        let p = centre + s * u + t * v;
+                        let to = p - x;
+                        let d2 = to.length_squared() as f64;
+                        let w = to.normalize();
+                        let cos_x = w.y as f64;
+                        let cos_s = (-w).dot(n) as f64;
+                        solid += cos_s * cos_x / d2 * (side * side) / (m * m) as f64;
+                    }
+                }
+                let p = surface.get(i, j);
+                let want = [0, 1, 2].map(|c| {
+                    albedo[c] / std::f64::consts::PI * reflectance[c] * radiance[c] * solid
+                });
+                for c in 0..3 {
+                    let rel = (p[c] as f64 - want[c]).abs() / want[c];
+                    if rel > worst {
+                        (worst, at) = (rel, (i, j, c, want[c]));
+                    }
+                }
+                want_image.set(i, j, want.map(|w| w as f32));
+                checked += 1;
+            }
+        }
+        eprintln!(
+            "flat mirror, filtering={filtering}: {checked} pixels, worst relative error {:.4}%",
+            worst * 100.0
+        );
+        // 1 %: one sample of a flat mirror is a pinhole camera of exactly the mirror's
+        // solid angle, so only the midpoint rule and float rounding separate the two
+        // (measured on lavapipe: 0.43 %, with and without filtering).
+        let (i, j, c, want) = at;
+        artifacts!(&format!("flat_mirror_filtering_{filtering}")).ensure(
+            worst < 0.01,
+            "surface",
+            &surface,
+            &want_image,
+            || {
+                format!(
+                    "filtering={filtering} pixel ({i},{j}) channel {c}: {} vs analytic {want} ({:.3}%)",
+                    surface.get(i, j)[c],
+                    worst * 100.0
+                )
+            },
+        );
+        assert!(
+            checked >= 12,
+            "only {checked} pixels inside the light's image"
+        );
+    }
+}
+
+#[test]
+fn ring_has_consistent_counters_passes_and_heatmap() {
+    let (surface, measured) = run(
+        builtin("ring", 64, 48),
+        serde_json::json!({"samples": 200, "samples_per_pass": 64}),
+    );
+    let lit = surface.pixels.iter().filter(|p| p[1] > 0.0).count();
+    assert!(lit > 50, "only {lit} caustic pixels");
+    let c = &measured.counters;
+    assert_eq!(c["samples"], 200);
+    assert_eq!(c["passes"], 4, "ceil(200 / 64)");
+    // Every receiver fragment of every pass loops over its batch: pairs = pixels × N.
+    let receivers = c["receiver_fragments"] / c["passes"];
+    assert_eq!(c["receiver_fragments"] % c["passes"], 0);
+    assert_eq!(c["sample_pixel_pairs"], receivers * 200);
+    assert!(c["texture_fetches"] > 0 && receivers > 1000, "{c:?}");
+    let names = measured.pass_names();
+    for want in ["pinhole/prepare_samples", "pinhole/gather"] {
+        assert!(names.contains(&want), "{want} missing from {names:?}");
+    }
+    // The heatmap counts one fragment per pixel and pass of the fullscreen gather.
+    assert!(
+        measured.fragment_invocations("pinhole/gather").is_some(),
+        "pipeline statistics"
+    );
+    assert_eq!(measured.fill_total(), 64 * 48 * 4);
+}
+
+#[test]
+fn filtering_changes_the_image_only_where_the_reflector_is_curved() {
+    // Flat mirror, many samples: the curvature footprint is zero, so on == off exactly.
+    let light =
+        serde_json::json!({"type": "point", "position": [-1, 1, 0], "intensity": [5, 5, 5]});
+    let flat = flat_mirror_scene(light, 0.5);
+    let run_with = |scene: &caustics_scene::Scene, f: &str| {
+        run(
+            scene.clone(),
+            serde_json::json!({"samples": 64, "filtering": f}),
+        )
+        .0
+    };
+    let off = run_with(&flat, "off");
+    assert!(off.sum_luminance() > 0.0);
+    assert_eq!(
+        off.pixels,
+        run_with(&flat, "curvature").pixels,
+        "flat mirror"
+    );
+    // The ring is curved around its axis: the footprint is not zero.
+    let ring = builtin("ring", 64, 48);
+    let off = run_with(&ring, "off");
+    let on = run_with(&ring, "curvature");
+    let changed = off
+        .pixels
+        .iter()
+        .zip(&on.pixels)
+        .filter(|(a, b)| a != b)
+        .count();
+    assert!(
+        changed > 50,
+        "curvature filtering changed only {changed} ring pixels"
+    );
+}
+
+#[test]
+fn same_seed_same_image_other_seed_other_image_for_every_strategy() {
+    let scene = builtin("ring", 48, 36);
+    for strategy in ["random", "grid", "quantized", "neighbor_removal"] {
+        let go = |seed: u32| {
+            run(
+                scene.clone(),
+                serde_json::json!({"sampling": strategy, "samples": 50, "seed": seed}),
+            )
+        };
+        let (a, ra) = go(7);
+        let (b, _) = go(7);
+        let (c, _) = go(8);
+        assert_eq!(ra.counter("samples"), 50, "{strategy}");
+        assert_eq!(a.pixels, b.pixels, "{strategy}: not deterministic");
+        assert_ne!(a.pixels, c.pixels, "{strategy}: the seed changes nothing");
+    }
+}
+
+#[test]
+fn refracting_sphere_focuses_light_under_it_close_to_the_cpu_reference() {
+    let c = compare(
+        &caustics_method::registry_entry::<pinhole::Pinhole>(),
+        builtin("sphere_on_plane", 96, 72),
+        serde_json::json!({"samples": 300}),
+        &TEST_REFERENCE,
+        4,
+    );
+    // The direct floor radiance is ρ/π·E·cos ≈ 0.25: the focus (sampled at the pixel
+    // centres) is much brighter.
+    let max = c.timed.pixels.iter().map(|p| p[1]).fold(0.0f32, f32::max);
+    assert!(max > 1.0, "no focus under the glass sphere: max {max}");
+    // Bounds a margin above lavapipe's figures at 96×72, 16 samples per pixel
+    // (flux 0.969, relMSE after flux 1.5e-3 (one pixel off: 1.0e-2), HDR-FLIP after flux 0.394):
+    // the method (like its paper) does not follow the light the glass sphere reflects (off
+    // its surface, and inside it), which the reference spreads as a dim halo around the
+    // focus (see the -expected image of a failure): that light is short in the flux and
+    // sets most of HDR-FLIP, whose brighter exposures show the halo (static-grid, which
+    // follows the reflection, scores 0.15 here).
+    // No flux above 1.02: light the method does not model cannot be there. The relMSE
+    // bound is about twice the figure and refuses the image moved by one pixel.
+    // 300 point samples on the sphere (the paper's defaults take 1000) leave sampling
+    // noise in the shape, hence the larger relMSE bound.
+    c.check(
+        &artifacts!(),
+        &Bounds {
+            flux: 0.85..1.02,
+            rel_mse_after_flux: 3e-3,
+            hdr_flip_after_flux: 0.45,
+        },
+    );
+}
+
+#[test]
+fn bad_parameters_are_clear_errors() {
+    // (The harness's cli test checks that a refused parameter writes nothing.)
+    for (param, needle) in [
+        (
+            serde_json::json!({"sampling": "hexagonal"}),
+            "sampling: expected one of",
+        ),
+        (serde_json::json!({"samples": 0}), "samples"),
+        (
+            serde_json::json!({"filtering": "maybe"}),
+            "filtering: expected one of",
+        ),
+        (serde_json::json!({"cube_size": 100}), "cube_size"),
+        (serde_json::json!({"light_size": 1}), "known parameters"),
+    ] {
+        let e = (caustics_method::registry_entry::<pinhole::Pinhole>().parse)(&param)
+            .expect_err(&param.to_string());
+        let msg = e.to_string();
+        assert!(
+            msg.contains(needle) && msg.contains("pinhole"),
+            "{param}: {msg}"
+        );
+    }
+}

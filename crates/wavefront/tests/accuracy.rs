@@ -1,0 +1,251 @@
+//! `wavefront` (Wallace 2016) on the GPU, on whatever adapter the machine has (lavapipe
+//! on CI; without an adapter these fail with the install hint, never skip): the analytic
+//! radiance under flat water and a flat mirror, the CPU reference on a refracting
+//! sphere, and the counters, passes and fill counts of a water pool.
+
+use caustics_testing::{
+    Bounds, Gpu, HdrImage, Measured, TEST_REFERENCE, artifacts, builtin, compare, scene,
+};
+
+fn nonzero_pixels(img: &HdrImage) -> usize {
+    img.pixels
+        .iter()
+        .filter(|p| p.iter().any(|&c| c > 0.0))
+        .count()
+}
+
+#[test]
+fn water_pool_gives_a_finite_nonempty_caustic_with_consistent_counts_passes_and_fill() {
+    let gpu = Gpu::new(builtin("water_pool", 320, 240));
+    let mut method = gpu.method(
+        &caustics_method::registry_entry::<wavefront::Wavefront>(),
+        serde_json::json!({}),
+    );
+    let measured = gpu.measure(method.as_mut(), 1, 3);
+    let surface = gpu.surface();
+    let lit = nonzero_pixels(&surface);
+    assert!(
+        lit > surface.pixels.len() / 4,
+        "only {lit} caustic pixels of {}",
+        surface.pixels.len()
+    );
+    assert!(surface.sum_luminance() > 0.0);
+    assert!(
+        measured.counter("kept_triangles") > 0,
+        "{:?}",
+        measured.counters
+    );
+    assert_eq!(
+        measured.counter("triangles"),
+        255 * 255 * 2,
+        "the 256² water grid"
+    );
+
+    // Timestamps: lavapipe has them, so every pass of every measured frame has a time,
+    // none rejected.
+    assert!(measured.timestamps, "adapter without timestamp queries");
+    assert_eq!(measured.frames.len(), 3);
+    for f in &measured.frames {
+        assert_eq!(f.rejected_timestamps, 0);
+        for p in &f.passes {
+            assert!(p.gpu_ms.is_some(), "no time for {}", p.name);
+        }
+    }
+    let names = measured.pass_names();
+    for want in [
+        "base/camera_gbuffer",
+        "base/shadow_map",
+        "base/direct",
+        "wavefront/trace_vertices",
+        "wavefront/splat",
+    ] {
+        assert!(names.contains(&want), "pass {want} missing from {names:?}");
+    }
+
+    // The water mesh's triangles are a few pixels wide here, so most invocations are
+    // helpers: only the loose bound holds (see `splat_statistics_vs_heatmap`).
+    let (stats, fill) = splat_statistics_vs_heatmap(&measured);
+    assert!(
+        stats <= MAX_INVOCATIONS_PER_FRAGMENT * fill,
+        "statistics {stats} > {MAX_INVOCATIONS_PER_FRAGMENT} x heatmap {fill}"
+    );
+}
+
+/// Helper invocations: the rasterizer runs fragment shaders on whole 2x2 quads
+/// (hardware) or 4x4 blocks (llvmpipe), and pipeline statistics may count the helper
+/// lanes, which never write the fill counter. So heatmap <= statistics <= 16 x heatmap
+/// always, and with triangles much larger than a block the two agree closely.
+const MAX_INVOCATIONS_PER_FRAGMENT: f64 = 16.0;
+
+/// Largest share of splat-pass invocations the heatmap misses when the triangles are
+/// large (flat-water scene: a 9² grid over 12 m seen from 0.9 m, triangles of tens of
+/// thousands of pixels at 320x240). Measured on lavapipe (Mesa 22.3.6, llvmpipe 4x4
+/// blocks): 0.0845 (83888 invocations for 76800 fragments); 2x2-quad hardware sees less.
+const LARGE_TRIANGLE_HELPER_MARGIN: f64 = 0.10;
+
+/// (pipeline-statistics fragment invocations of `wavefront/splat`, heatmap sum),
+/// with heatmap <= statistics checked.
+fn splat_statistics_vs_heatmap(measured: &Measured) -> (f64, f64) {
+    let stats = measured
+        .fragment_invocations("wavefront/splat")
+        .expect("pipeline statistics of the splat pass on this adapter") as f64;
+    let fill = measured.fill_total() as f64;
+    assert!(fill > 0.0, "empty heatmap");
+    assert!(
+        stats >= fill,
+        "statistics {stats} < heatmap {fill}: the counter saw fragments the GPU did not shade"
+    );
+    (stats, fill)
+}
+
+/// Exact unpolarized Fresnel transmittance from air into a dielectric, computed here
+/// independently of the shaders.
+fn fresnel_transmittance(cos_i: f64, ior: f64) -> f64 {
+    let sin_t = (1.0 - cos_i * cos_i).sqrt() / ior;
+    let cos_t = (1.0 - sin_t * sin_t).sqrt();
+    let rs = (cos_i - ior * cos_t) / (cos_i + ior * cos_t);
+    let rp = (ior * cos_i - cos_t) / (ior * cos_i + cos_t);
+    1.0 - 0.5 * (rs * rs + rp * rp)
+}
+
+/// Checks every pixel of the central half of `surface` against `expected(channel)`
+/// within `bound` (relative), writing the images on failure.
+fn central_half_matches(surface: &HdrImage, expected: [f64; 3], bound: f64, what: &str) -> usize {
+    let (w, h) = (surface.width, surface.height);
+    let mut want = surface.clone();
+    let (mut worst, mut at, mut checked) = (0.0f64, (0, 0, 0), 0);
+    for y in h / 4..3 * h / 4 {
+        for x in w / 4..3 * w / 4 {
+            let p = surface.get(x, y);
+            for c in 0..3 {
+                let rel = (p[c] as f64 - expected[c]).abs() / expected[c];
+                if rel > worst {
+                    (worst, at) = (rel, (x, y, c));
+                }
+            }
+            want.set(x, y, expected.map(|v| v as f32));
+            checked += 1;
+        }
+    }
+    let (x, y, c) = at;
+    eprintln!(
+        "{what}: {checked} pixels, worst relative error {:.4}%",
+        worst * 100.0
+    );
+    artifacts!(what).ensure(worst < bound, "surface", surface, &want, || {
+        format!(
+            "{what}: pixel ({x},{y}) channel {c}: {} vs analytic {} ({:.3}%)",
+            surface.get(x, y)[c],
+            expected[c],
+            worst * 100.0
+        )
+    });
+    checked
+}
+
+#[test]
+fn flat_water_gives_the_analytic_floor_radiance_within_one_percent() {
+    let dir_vec = [0.5f64, -1.0, 0.3];
+    let len = dir_vec.iter().map(|v| v * v).sum::<f64>().sqrt();
+    let cos_theta = 1.0 / len;
+    let (ior, albedo, irradiance) = (1.33f64, [0.8f64, 0.6, 0.4], [1.0f64, 2.0, 0.5]);
+    let scene = scene(&serde_json::json!({
+        "name": "flat_water",
+        "description": "flat water over a floor: the analytic check of wavefront",
+        "camera": {"eye": [0, 0.9, 0], "target": [0, 0, 0], "up": [0, 0, -1], "fov_y_deg": 60, "width": 320, "height": 240},
+        "lights": [{"type": "directional", "direction": dir_vec, "irradiance": irradiance}],
+        "materials": {"water": {"type": "dielectric", "ior": ior}, "floor": {"type": "diffuse", "albedo": albedo}},
+        "objects": [
+            {"shape": {"type": "quad", "center": [0, 0, 0], "normal": [0, 1, 0], "size": [6, 6]}, "material": "floor"},
+            {"shape": {"type": "heightfield", "center": [0, 1, 0], "size": [12, 12], "resolution": [9, 9],
+                       "waves": [{"amplitude": 0.0, "wavelength": 1.0, "direction": [1, 0], "phase": 0}]},
+             "material": "water"}
+        ]
+    }));
+    let gpu = Gpu::new(scene);
+    let mut method = gpu.method(
+        &caustics_method::registry_entry::<wavefront::Wavefront>(),
+        serde_json::json!({}),
+    );
+    let measured = gpu.measure(method.as_mut(), 0, 1);
+    let surface = gpu.surface();
+
+    let (stats, fill) = splat_statistics_vs_heatmap(&measured);
+    let margin = (stats - fill) / stats;
+    eprintln!("flat water: splat statistics {stats}, heatmap {fill}, helper margin {margin:.4}");
+    assert!(
+        margin <= LARGE_TRIANGLE_HELPER_MARGIN,
+        "statistics {stats} vs heatmap {fill}: margin {margin:.4}"
+    );
+
+    // ρ/π · T(θ) · E · cos θ: a parallel beam through a flat interface onto a parallel
+    // floor keeps its footprint. Every pixel of the central half sees the floor under
+    // the flat water. 1 %: the method is exact here up to float rounding of the area
+    // ratio (measured on lavapipe: 0.0026 %).
+    let t = fresnel_transmittance(cos_theta, ior);
+    let expected =
+        [0, 1, 2].map(|c| albedo[c] / std::f64::consts::PI * t * irradiance[c] * cos_theta);
+    let (w, h) = (surface.width, surface.height);
+    let checked = central_half_matches(&surface, expected, 0.01, "flat_water");
+    assert_eq!(checked, (w / 2 * h / 2) as usize);
+}
+
+#[test]
+fn flat_mirror_gives_the_analytic_reflected_radiance_within_one_percent() {
+    let (reflectance, albedo, irradiance) =
+        ([0.9f64, 0.7, 0.5], [0.8f64, 0.6, 0.4], [1.0f64, 2.0, 0.5]);
+    // A vertical mirror (normal +x) under light travelling along (-1, -1, 0): the
+    // reflected beam travels along (1, -1, 0) and meets the floor at 45 degrees.
+    let scene = scene(&serde_json::json!({
+        "name": "flat_mirror",
+        "description": "a vertical mirror reflecting a directional light onto a floor",
+        "camera": {"eye": [1, 2, 0], "target": [1, 0, 0], "up": [0, 0, -1], "fov_y_deg": 40, "width": 160, "height": 120},
+        "lights": [{"type": "directional", "direction": [-1, -1, 0], "irradiance": irradiance}],
+        "materials": {"mirror": {"type": "mirror", "reflectance": reflectance}, "floor": {"type": "diffuse", "albedo": albedo}},
+        "objects": [
+            {"shape": {"type": "quad", "center": [0, 1.5, 0], "normal": [1, 0, 0], "size": [3, 6]}, "material": "mirror"},
+            {"shape": {"type": "quad", "center": [2, 0, 0], "normal": [0, 1, 0], "size": [4, 6]}, "material": "floor"}
+        ]
+    }));
+    let gpu = Gpu::new(scene);
+    let mut method = gpu.method(
+        &caustics_method::registry_entry::<wavefront::Wavefront>(),
+        serde_json::json!({"grid": 64}),
+    );
+    let measured = gpu.measure(method.as_mut(), 0, 1);
+    assert_eq!(measured.counter("dropped_face_mismatch"), 0);
+    // ρ/π · R · E · cos 45°; 1 %, the method being exact on a flat mirror as on flat
+    // water (measured on lavapipe: 0.0010 %).
+    let cos_floor = std::f64::consts::FRAC_1_SQRT_2;
+    let expected = [0, 1, 2]
+        .map(|c| albedo[c] / std::f64::consts::PI * reflectance[c] * irradiance[c] * cos_floor);
+    central_half_matches(&gpu.surface(), expected, 0.01, "flat_mirror");
+}
+
+#[test]
+fn refracting_sphere_is_close_to_the_cpu_reference() {
+    let c = compare(
+        &caustics_method::registry_entry::<wavefront::Wavefront>(),
+        builtin("sphere_on_plane", 96, 72),
+        serde_json::json!({}),
+        &TEST_REFERENCE,
+        4,
+    );
+    // Bounds a margin above lavapipe's figures at 96×72, 16 samples per pixel
+    // (flux 0.910, relMSE after flux 2.2e-4 (one pixel off: 6.5e-3), HDR-FLIP after flux 0.417):
+    // the method (like its paper) does not follow the light the glass sphere reflects (off
+    // its surface, and inside it), which the reference spreads as a dim halo around the
+    // focus (see the -expected image of a failure): that light is short in the flux and
+    // sets most of HDR-FLIP, whose brighter exposures show the halo (static-grid, which
+    // follows the reflection, scores 0.15 here).
+    // No flux above 1.02: light the method does not model cannot be there. The relMSE
+    // bound is about twice the figure and refuses the image moved by one pixel.
+    c.check(
+        &artifacts!(),
+        &Bounds {
+            flux: 0.85..1.02,
+            rel_mse_after_flux: 5e-4,
+            hdr_flip_after_flux: 0.47,
+        },
+    );
+}
