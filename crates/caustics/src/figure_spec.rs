@@ -458,15 +458,42 @@ pub fn labels(keys: &[Key], r: &RunInfo) -> String {
         .join(" ")
 }
 
-/// The distinct labels of `keys` over `runs`: by value where one numeric key decides,
-/// else in order of first appearance.
-pub fn ordered(keys: &[Key], runs: &[&RunInfo]) -> Vec<String> {
+/// The values a selector lists for a key, in its order (the first selector that lists
+/// two or more).
+fn listed(key: &Key, select: &[Selector]) -> Option<Vec<Value>> {
+    let names = |l: &Option<Vec<String>>| -> Option<Vec<Value>> {
+        let l = l.as_ref()?;
+        Some(l.iter().map(|n| Value::String(n.clone())).collect())
+    };
+    select
+        .iter()
+        .filter_map(|s| match key {
+            Key::Scene => names(&s.scene),
+            Key::Method => names(&s.method),
+            Key::Group => names(&s.group),
+            Key::Param(p) => s.params.get(p).and_then(Value::as_array).cloned(),
+        })
+        .find(|l| l.len() > 1)
+}
+
+/// The distinct labels of `keys` over `runs`. Where one key decides: in the order the
+/// figure's `where` lists its values, else by value if they are numbers; otherwise in
+/// order of first appearance.
+pub fn ordered(keys: &[Key], runs: &[&RunInfo], select: &[Selector]) -> Vec<String> {
+    let hint = match keys {
+        [k] => listed(k, select),
+        _ => None,
+    };
     let mut seen: Vec<(String, Option<f64>)> = Vec::new();
     for r in runs {
         let label = labels(keys, r);
         if !seen.iter().any(|s| s.0 == label) {
-            let number = match keys {
-                [k] => k.value(r).and_then(|v| v.as_f64()),
+            let number = match (keys, &hint) {
+                ([k], Some(h)) => k
+                    .value(r)
+                    .and_then(|v| h.iter().position(|x| same(x, &v)))
+                    .map(|i| i as f64),
+                ([k], None) => k.value(r).and_then(|v| v.as_f64()),
                 _ => None,
             };
             seen.push((label, number));
@@ -505,9 +532,15 @@ pub struct Grid {
     pub cells: Vec<(usize, usize, usize, String)>,
 }
 
-/// Lays `runs` out by `rows` and `cols`; two runs in one cell is an error.
-pub fn grid(rows: &[Key], cols: &[Key], runs: &[&RunInfo]) -> std::result::Result<Grid, String> {
-    let row_labels = ordered(rows, runs);
+/// Lays `runs` out by `rows` and `cols` (ordered as [`ordered`] says, by the figure's
+/// selectors `select`); two runs in one cell is an error.
+pub fn grid(
+    rows: &[Key],
+    cols: &[Key],
+    runs: &[&RunInfo],
+    select: &[Selector],
+) -> std::result::Result<Grid, String> {
+    let row_labels = ordered(rows, runs, select);
     let mut cells = Vec::new();
     if cols.is_empty() {
         // Each cell labelled by what tells it from the other runs of its row.
@@ -536,7 +569,7 @@ pub fn grid(rows: &[Key], cols: &[Key], runs: &[&RunInfo]) -> std::result::Resul
             cells,
         });
     }
-    let col_labels = ordered(cols, runs);
+    let col_labels = ordered(cols, runs, select);
     let mut taken: BTreeMap<(usize, usize), usize> = BTreeMap::new();
     for (i, r) in runs.iter().enumerate() {
         let row = row_labels
@@ -754,7 +787,7 @@ pub fn parse(
                         ),
                     ));
                 }
-                let g = grid(&rows, &cols, &mine).map_err(|m| err("", m))?;
+                let g = grid(&rows, &cols, &mine, &select).map_err(|m| err("", m))?;
                 if reference {
                     for (row, label) in g.rows.iter().enumerate() {
                         let mut scenes: Vec<&str> = g

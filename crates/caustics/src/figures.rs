@@ -14,7 +14,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::experiment::Experiment;
 use crate::figure_spec::{
-    Column, Defaults, Figure, Kind, Measure, RunInfo, distinguishing, grid, labels, pairs,
+    Column, Defaults, Figure, Key, Kind, Measure, RunInfo, distinguishing, grid, labels, pairs,
     value_text,
 };
 use crate::plots::{GUIDE, INK, PALETTE, Series, Style, colour, finish, plot_err, scatter};
@@ -183,7 +183,8 @@ fn image_grid(
         return Ok(false);
     };
     let infos: Vec<&RunInfo> = runs.iter().map(|r| &r.1).collect();
-    let g = grid(rows, cols, &infos).map_err(|m| anyhow::anyhow!("figure {}: {m}", f.name))?;
+    let g = grid(rows, cols, &infos, &f.select)
+        .map_err(|m| anyhow::anyhow!("figure {}: {m}", f.name))?;
     let mut images: BTreeMap<(usize, usize), (String, Option<Rgb8Image>)> = BTreeMap::new();
     for (row, col, pos, label) in &g.cells {
         let r = runs[*pos].0;
@@ -481,7 +482,11 @@ fn ratio(f: &Figure, runs: &[&(&Row, RunInfo)], png: &Path, d: &mut DrawnFigure)
     // Pairs are told apart by what varies among their numerator sides.
     let numerators: Vec<&RunInfo> = p.iter().map(|(i, _)| infos[*i]).collect();
     let dist = distinguishing(&numerators, std::slice::from_ref(of));
-    let (num_label, den_label) = (value_text(numerator), value_text(denominator));
+    let side = |v: &serde_json::Value| match of {
+        Key::Param(p) => format!("{p}={}", value_text(v)),
+        _ => value_text(v),
+    };
+    let (num_label, den_label) = (side(numerator), side(denominator));
     let mut rows = Vec::new();
     let mut bars = Vec::new();
     for (i, j) in &p {
@@ -505,15 +510,15 @@ fn ratio(f: &Figure, runs: &[&(&Row, RunInfo)], png: &Path, d: &mut DrawnFigure)
                 m.to_string(),
                 a.map(cell).unwrap_or("–".into()),
                 b.map(cell).unwrap_or("–".into()),
-                q.map(|q| format!("{q:.3}")).unwrap_or("–".into()),
+                q.map(ratio_text).unwrap_or("–".into()),
             ]);
             if let Some(q) = q.filter(|q| *q > 0.0) {
-                said.push(format!("{m} {q:.3}×"));
+                said.push(format!("{m} {}×", ratio_text(q)));
                 bars.push((format!("{pair}: {m}"), q, PALETTE[mi % PALETTE.len()]));
             }
         }
         d.notes.push(format!(
-            "{pair}: {of}={num_label} ÷ {of}={den_label}: {}",
+            "{pair}: {num_label} ÷ {den_label}: {}",
             if said.is_empty() {
                 "no measure on both sides".into()
             } else {
@@ -525,8 +530,8 @@ fn ratio(f: &Figure, runs: &[&(&Row, RunInfo)], png: &Path, d: &mut DrawnFigure)
         head: vec![
             "pair".into(),
             "measure".into(),
-            format!("{of}={num_label}"),
-            format!("{of}={den_label}"),
+            num_label.clone(),
+            den_label.clone(),
             "ratio".into(),
         ],
         rows,
@@ -536,6 +541,15 @@ fn ratio(f: &Figure, runs: &[&(&Row, RunInfo)], png: &Path, d: &mut DrawnFigure)
     }
     ratio_bars(png, &f.title, &bars)?;
     Ok(true)
+}
+
+/// A ratio with three decimals, or three significant digits when far from 1.
+fn ratio_text(q: f64) -> String {
+    if (1e-3..1e4).contains(&q.abs()) {
+        format!("{q:.3}")
+    } else {
+        format!("{q:.3e}")
+    }
 }
 
 /// Horizontal bars of ratios about a centre line at 1, log scale (a ratio of 2 and one
@@ -578,7 +592,7 @@ fn ratio_bars(path: &Path, title: &str, bars: &[(String, f64, [u8; 3])]) -> Resu
             ))
             .map_err(plot_err)?;
             text.push((8, y + 3, label.clone(), false));
-            let v = format!("{q:.3}");
+            let v = ratio_text(*q);
             let tx = if len >= 0 {
                 x1 + 4
             } else {
@@ -592,8 +606,8 @@ fn ratio_bars(path: &Path, title: &str, bars: &[(String, f64, [u8; 3])]) -> Resu
             colour(INK),
         ))
         .map_err(plot_err)?;
-        let lo = format!("{:.3}", 10f64.powf(-span));
-        let hi = format!("{:.3}", 10f64.powf(span));
+        let lo = ratio_text(10f64.powf(-span));
+        let hi = ratio_text(10f64.powf(span));
         text.push((
             centre - half - text_width(&lo) as i32 / 2,
             bottom + 6,
@@ -704,7 +718,7 @@ mod tests {
       "runs": [{"label": "sweep", "scenes": ["ring"], "methods": ["pinhole"],
                 "params": {"sampling": ["random", "grid"], "samples": [100, 1000], "filtering": ["off", "full"]}}],
       "figures": [
-        {"name": "grid", "kind": "image_grid", "where": {"params": {"filtering": "full"}},
+        {"name": "grid", "kind": "image_grid", "where": {"params": {"filtering": "full", "sampling": ["grid", "random"]}},
          "rows": "param:sampling", "cols": "param:samples", "reference": true},
         {"name": "time", "kind": "line", "x": "counter:sample_pixel_pairs", "y": "method_gpu_ms",
          "series": "param:filtering", "fit": "linear"},
@@ -850,7 +864,8 @@ mod tests {
             "an old figure stays"
         );
 
-        // Image grid: rows random, grid; columns 100, 1000, reference; 16x12 enlarged 8x.
+        // Image grid: rows grid, random (as `where` lists them); columns 100, 1000 (by
+        // number), reference; 16x12 enlarged 8x.
         let g = by("grid");
         assert_eq!(g.file.as_deref(), Some("figures/grid.png"));
         let img = caustics_metrics::read_png(&dir.join("figures/grid.png")).expect("png");
@@ -864,8 +879,8 @@ mod tests {
         let (x6, y6) = find(shade(6)).expect("run 6 drawn");
         let (x7, y7) = find(shade(7)).expect("run 7 drawn");
         assert!(
-            y6 < y7 && x6 == x7,
-            "random above grid in one column: {x6},{y6} {x7},{y7}"
+            y7 < y6 && x6 == x7,
+            "grid above random in one column: {x6},{y6} {x7},{y7}"
         );
         let (x4, y4) = find(shade(4)).expect("run 4 drawn");
         assert!(x4 < x6 && y4 == y6, "100 samples left of 1000 in one row");

@@ -61,6 +61,7 @@ fn deterministic(dir: &Path) -> Vec<serde_json::Value> {
             let o = v.as_object_mut().expect("object");
             o.remove("method_gpu_ms");
             o.remove("frame_gpu_ms");
+            o.remove("pass_gpu_ms");
             v
         })
         .collect()
