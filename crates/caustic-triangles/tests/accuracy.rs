@@ -9,29 +9,7 @@ use caustic_triangles::photon_hits::PhotonHitConfig;
 use caustic_triangles::{CausticTriangles, CausticTrianglesParams};
 use caustics_gpu::RendererOptions;
 use caustics_scene::{Scene, Vec3};
-use caustics_testing::{
-    Bounds, Gpu, HdrImage, Measured, TEST_REFERENCE, artifacts, builtin, compare, plane_hit, scene,
-};
-
-/// Small settings shared by the tests: 48² photon image, 128² cube faces.
-fn small(extra: serde_json::Value) -> serde_json::Value {
-    let mut p = serde_json::json!({"resolution": 48, "cube_size": 128, "distance_map_size": 128});
-    if let (Some(p), Some(extra)) = (p.as_object_mut(), extra.as_object()) {
-        p.extend(extra.clone());
-    }
-    p
-}
-
-/// Renders `scene` through the registry entry: the measured frames and the image.
-fn run(scene: Scene, params: serde_json::Value) -> (HdrImage, Measured) {
-    let gpu = Gpu::new(scene);
-    let mut method = gpu.method(
-        &caustics_method::registry_entry::<caustic_triangles::CausticTriangles>(),
-        params,
-    );
-    let measured = gpu.measure(method.as_mut(), 0, 1);
-    (gpu.surface(), measured)
-}
+use caustics_testing::{Bounds, Gpu, artifacts, builtin, plane_hit, refracting_sphere, scene};
 
 /// The uploaded scene with small shadow maps, and the method built directly (these
 /// tests read its photon hits and vertex irradiance back), after one frame.
@@ -210,22 +188,15 @@ fn flat_mirror_vertices_carry_the_reflected_irradiance() {
 
 #[test]
 fn refracting_sphere_is_close_to_the_cpu_reference() {
-    let c = compare(
-        &caustics_method::registry_entry::<caustic_triangles::CausticTriangles>(),
-        builtin("sphere_on_plane", 96, 72),
-        serde_json::json!({}),
-        &TEST_REFERENCE,
-        4,
-    );
+    let c = refracting_sphere(&caustics_method::registry_entry::<
+        caustic_triangles::CausticTriangles,
+    >());
     // Bounds a margin above lavapipe's figures at 96×72, 16 samples per pixel
     // (flux 0.906, relMSE after flux 2.2e-4 (one pixel off: 6.6e-3), HDR-FLIP after flux 0.410):
-    // the method (like its paper) does not follow the light the glass sphere reflects (off
-    // its surface, and inside it), which the reference spreads as a dim halo around the
-    // focus (see the -expected image of a failure): that light is short in the flux and
-    // sets most of HDR-FLIP, whose brighter exposures show the halo (static-grid, which
-    // follows the reflection, scores 0.15 here).
-    // No flux above 1.02: light the method does not model cannot be there. The relMSE
-    // bound is about twice the figure and refuses the image moved by one pixel.
+    // the light the glass sphere reflects, which the method (like its paper) does not
+    // follow, is short in the flux and sets most of HDR-FLIP; no flux above 1.02; relMSE
+    // about twice the figure, refusing the image moved by one pixel (the whole why:
+    // `caustics_testing::refracting_sphere`).
     c.check(
         &artifacts!(),
         &Bounds {
@@ -236,99 +207,44 @@ fn refracting_sphere_is_close_to_the_cpu_reference() {
     );
 }
 
-/// Pixels seeing the floor (y = -3) under the table of `light_leak`: hidden from the
-/// glass ball by the table, and out of reach of the light passing the table's edge (it
-/// diverges after the focus).
-fn occluded_floor_pixels(scene: &Scene) -> Vec<(u32, u32)> {
-    let cam = &scene.camera;
-    (0..cam.height)
-        .flat_map(|j| (0..cam.width).map(move |i| (i, j)))
-        .filter(|&(i, j)| {
-            plane_hit(cam, i, j, -3.0).is_some_and(|p| p.x.abs() < 0.7 && p.z.abs() < 0.7)
-        })
-        .collect()
-}
-
 #[test]
 fn distance_test_removes_the_light_leak_onto_an_occluded_receiver() {
-    let scene = builtin("light_leak", 64, 48);
-    let pixels = occluded_floor_pixels(&scene);
-    assert!(
-        pixels.len() > 30,
-        "only {} occluded floor pixels",
-        pixels.len()
-    );
-    let sum =
-        |img: &HdrImage| -> f64 { pixels.iter().map(|&(i, j)| img.get(i, j)[1] as f64).sum() };
-    let (with, _) = run(
-        scene.clone(),
-        small(serde_json::json!({"distance_test": true})),
-    );
-    let (without, _) = run(scene, small(serde_json::json!({"distance_test": false})));
-    eprintln!(
-        "caustic on the occluded floor {:.4} with the distance test, {:.4} without; whole image {:.4} / {:.4}",
-        sum(&with),
-        sum(&without),
-        with.sum_luminance(),
-        without.sum_luminance()
-    );
-    assert_eq!(sum(&with), 0.0, "light leaks despite the test");
-    assert!(
-        sum(&without) > 1.0,
-        "no leak without the test, the scene shows nothing"
+    caustics_testing::photon_hits::distance_test_removes_the_light_leak(
+        &caustics_method::registry_entry::<caustic_triangles::CausticTriangles>(),
     );
 }
 
 #[test]
 fn counts_and_images_are_deterministic() {
-    let scene = builtin("ring", 64, 48);
-    let (a, ra) = run(scene.clone(), small(serde_json::json!({})));
-    let (b, rb) = run(scene, small(serde_json::json!({})));
-    assert_eq!(ra.counters, rb.counters);
-    assert!(ra.counter("photon_hits") > 100, "{:?}", ra.counters);
-    assert_eq!(ra.counter("photon_texels"), 48 * 48);
-    let fa = ra
-        .method_fragments("caustic-triangles")
-        .expect("pipeline statistics");
-    assert_eq!(Some(fa), rb.method_fragments("caustic-triangles"));
-    assert_eq!(a.pixels, b.pixels, "image differs between runs");
-    assert!(a.sum_luminance() > 0.0, "no caustic on the ring floor");
-    let names = ra.pass_names();
-    for pass in [
-        "light_gbuffer",
-        "distance_maps",
-        "trace_photons",
-        "camera_lookup",
-    ] {
-        let want = format!("caustic-triangles/{pass}");
-        assert!(
-            names.contains(&want.as_str()),
-            "{want} missing from {names:?}"
-        );
-    }
+    caustics_testing::photon_hits::deterministic(
+        &caustics_method::registry_entry::<caustic_triangles::CausticTriangles>(),
+        builtin("ring", 64, 48),
+        &[
+            "light_gbuffer",
+            "distance_maps",
+            "trace_photons",
+            "camera_lookup",
+        ],
+    );
 }
 
 #[test]
 fn bad_parameters_and_unsupported_scenes_are_clear() {
     // (The harness's cli test checks that a refused parameter writes nothing.)
     let info = caustics_method::registry_entry::<caustic_triangles::CausticTriangles>();
-    for (param, needle) in [
-        (serde_json::json!({"resolution": 1}), "resolution"),
-        (serde_json::json!({"max_stretch": 0}), "max_stretch"),
-    ] {
-        let msg = (info.parse)(&param)
-            .expect_err(&param.to_string())
-            .to_string();
-        assert!(
-            msg.contains(needle) && msg.contains("caustic-triangles"),
-            "{param}: {msg}"
-        );
-    }
+    caustics_testing::photon_hits::parameters_refused(
+        &info,
+        &[
+            (serde_json::json!({"resolution": 1}), "resolution"),
+            (serde_json::json!({"max_stretch": 0}), "max_stretch"),
+        ],
+    );
     // Two specular objects: one photon hit image follows one generator.
     let reason = info
         .supports(
             &builtin("sphere_over_water", 32, 24),
-            &(info.parse)(&small(serde_json::json!({}))).expect("valid parameters"),
+            &(info.parse)(&caustics_testing::photon_hits::small(serde_json::json!({})))
+                .expect("valid parameters"),
         )
         .expect_err("sphere_over_water must be declined");
     assert!(reason.0.contains("both specular"), "{}", reason.0);

@@ -21,6 +21,10 @@
 //!   HDR-FLIP, ...); [`compare`] does all of it for one method on one scene at the
 //!   shared photon budget [`TEST_REFERENCE`], and [`Comparison::check`] holds it to
 //!   [`Bounds`], refusing bounds too loose to see the image moved by one pixel;
+//!   [`refracting_sphere`] is the method crates' comparison on the glass sphere (and why
+//!   their bounds look alike);
+//! - [`photon_hits`] holds the checks the two photon-hit methods share (light leak,
+//!   determinism, parameter errors), each taking the method's registry entry;
 //! - [`Artifacts::ensure`] checks a bound and, when it fails, writes `<name>-actual`,
 //!   `<name>-expected` and `<name>-difference` images and says where (STYLE 9).
 //!
@@ -57,6 +61,7 @@
 mod artifacts;
 mod compare;
 mod gpu;
+pub mod photon_hits;
 mod reference;
 mod scenes;
 mod score;
@@ -64,7 +69,7 @@ mod score;
 pub use artifacts::{Artifacts, target_dir};
 pub use caustics_metrics::{Errors, HdrImage, ToneMap, luminance};
 pub use caustics_reference::ReferenceOptions;
-pub use compare::{Bounds, Comparison, TEST_REFERENCE, compare, shifted};
+pub use compare::{Bounds, Comparison, TEST_REFERENCE, compare, refracting_sphere, shifted};
 pub use gpu::{Gpu, Measured, Scored, context};
 pub use reference::{ReferenceImages, reference};
 pub use scenes::{builtin, builtin_json, plane_hit, scene};

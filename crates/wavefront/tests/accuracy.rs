@@ -4,7 +4,7 @@
 //! sphere, and the counters, passes and fill counts of a water pool.
 
 use caustics_testing::{
-    Bounds, Gpu, HdrImage, Measured, TEST_REFERENCE, artifacts, builtin, compare, scene,
+    Bounds, Gpu, HdrImage, Measured, artifacts, builtin, refracting_sphere, scene,
 };
 
 fn nonzero_pixels(img: &HdrImage) -> usize {
@@ -224,22 +224,13 @@ fn flat_mirror_gives_the_analytic_reflected_radiance_within_one_percent() {
 
 #[test]
 fn refracting_sphere_is_close_to_the_cpu_reference() {
-    let c = compare(
-        &caustics_method::registry_entry::<wavefront::Wavefront>(),
-        builtin("sphere_on_plane", 96, 72),
-        serde_json::json!({}),
-        &TEST_REFERENCE,
-        4,
-    );
+    let c = refracting_sphere(&caustics_method::registry_entry::<wavefront::Wavefront>());
     // Bounds a margin above lavapipe's figures at 96×72, 16 samples per pixel
     // (flux 0.910, relMSE after flux 2.2e-4 (one pixel off: 6.5e-3), HDR-FLIP after flux 0.417):
-    // the method (like its paper) does not follow the light the glass sphere reflects (off
-    // its surface, and inside it), which the reference spreads as a dim halo around the
-    // focus (see the -expected image of a failure): that light is short in the flux and
-    // sets most of HDR-FLIP, whose brighter exposures show the halo (static-grid, which
-    // follows the reflection, scores 0.15 here).
-    // No flux above 1.02: light the method does not model cannot be there. The relMSE
-    // bound is about twice the figure and refuses the image moved by one pixel.
+    // the light the glass sphere reflects, which the method (like its paper) does not
+    // follow, is short in the flux and sets most of HDR-FLIP; no flux above 1.02; relMSE
+    // about twice the figure, refusing the image moved by one pixel (the whole why:
+    // `caustics_testing::refracting_sphere`).
     c.check(
         &artifacts!(),
         &Bounds {
