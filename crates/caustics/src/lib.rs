@@ -10,6 +10,7 @@ pub mod compare;
 pub mod experiment;
 pub mod figure_spec;
 pub mod figures;
+pub mod limits_args;
 pub mod machine;
 pub mod plots;
 pub mod reference_cmd;

@@ -44,6 +44,9 @@ pub struct ReferenceArgs {
     /// Measure photons/s on sphere_on_plane, ring and water_pool instead.
     #[arg(long)]
     pub bench: bool,
+    /// Limits on the scene's meshes (`--max-scene-triangles` etc.).
+    #[command(flatten)]
+    pub limits: crate::limits_args::LimitArgs,
 }
 
 fn to_hdr(img: &ReferenceImage) -> HdrImage {
@@ -121,7 +124,7 @@ pub fn reference(args: &ReferenceArgs) -> Result<()> {
     }
     let name = args.scene.as_deref().context("--scene is required")?;
     let path = caustics_scene::resolve(name)?;
-    let scene = Scene::load(&path)?;
+    let scene = Scene::load_with_limits(&path, &args.limits.limits())?;
     let dir = match &args.out {
         Some(d) => d.clone(),
         None => cache_dir(&args.references, &scene),

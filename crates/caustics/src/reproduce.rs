@@ -512,6 +512,7 @@ fn run_one(e: &Experiment, spec: &RunSpec, args: &ReproduceArgs, out: &Path) -> 
         method: spec.method.clone(),
         params: Vec::new(),
         param_values: spec.params.clone(),
+        limits: Default::default(),
         frames: spec.frames,
         warmup: spec.warmup,
         reference: None,

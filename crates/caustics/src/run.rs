@@ -41,6 +41,9 @@ pub struct RunOptions {
     /// Parameters given as typed JSON values (experiments); merged with `params`.
     #[arg(skip)]
     pub param_values: serde_json::Map<String, serde_json::Value>,
+    /// Limits on the scene's meshes (`--max-scene-triangles` etc.).
+    #[command(flatten)]
+    pub limits: crate::limits_args::LimitArgs,
     /// Measured frames (timings are medians over these).
     #[arg(long, default_value_t = 20)]
     pub frames: u32,
@@ -157,7 +160,7 @@ fn validate_options(o: &RunOptions) -> Result<()> {
 pub fn run(o: &RunOptions) -> Result<RunOutcome> {
     validate_options(o)?;
     let scene_path = caustics_scene::resolve(&o.scene)?;
-    let scene = Scene::load(&scene_path)?;
+    let scene = Scene::load_with_limits(&scene_path, &o.limits.limits())?;
     run_scene(o, scene)
 }
 

@@ -176,3 +176,64 @@ fn list_shows_every_builtin_scene_and_method_defaults() {
         "a built-in scene does not load:\n{s}"
     );
 }
+
+/// A mesh over a scene limit is refused naming the flag that raises it, by `run` and
+/// by `reference`, before anything is written; the same flag raised lets it load.
+#[test]
+fn mesh_limits_are_flags_and_the_refusal_names_them() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let out = tmp.path().join("runs");
+    let out_s = out.display().to_string();
+    let o = caustics(&[
+        "run",
+        "--scene",
+        "bumpy_glass",
+        "--method",
+        "wavefront",
+        "--out",
+        &out_s,
+        "--max-scene-triangles",
+        "10",
+    ]);
+    assert!(
+        !o.status.success(),
+        "a 10-triangle limit must refuse bumpy_glass"
+    );
+    let e = stderr(&o);
+    assert!(
+        e.contains("more than the limit of 10") && e.contains("--max-scene-triangles"),
+        "{e}"
+    );
+    assert!(!out.exists(), "nothing may be written");
+    let refs = tmp.path().join("refs").display().to_string();
+    let o = caustics(&[
+        "reference",
+        "--scene",
+        "bumpy_glass",
+        "--photons",
+        "1000",
+        "--references",
+        &refs,
+        "--max-mesh-triangles",
+        "10",
+    ]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("--max-mesh-triangles"),
+        "{}",
+        stderr(&o)
+    );
+    // Raised above the mesh's size, the scene loads and the reference renders.
+    let o = caustics(&[
+        "reference",
+        "--scene",
+        "bumpy_glass",
+        "--photons",
+        "1000",
+        "--references",
+        &refs,
+        "--max-mesh-triangles",
+        "100000000",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+}

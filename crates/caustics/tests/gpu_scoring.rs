@@ -67,6 +67,7 @@ fn a_scored_run_keeps_pixel_averaged_and_1spp_errors_side_by_side() {
         batches: 4,
         direct: false,
         bench: false,
+        limits: Default::default(),
     })
     .expect("reference");
     let mut o = run_options(&scene, &tmp.path().join("runs"), "wavefront", &[]);

@@ -148,7 +148,7 @@ fn gltf_structure_problems_are_refused_by_name() {
                 g["accessors"][0]["count"] = json!(1u64 << 40);
                 g["accessors"][1]["count"] = json!(1u64 << 40);
             }),
-            "vertices in the mesh file (reached at mesh 0 primitive 0 (at node 1)): 1099511627776, more than the limit of 8388608 (raise Limits::max_mesh_vertices",
+            "vertices in the mesh file (reached at mesh 0 primitive 0 (at node 1)): 1099511627776, more than the limit of 8388608 (raise it with --max-mesh-vertices",
         ),
         (
             "count 0",

@@ -34,6 +34,7 @@ pub(crate) fn run_options(scene: &Path, out: &Path, method: &str, params: &[&str
         method: method.into(),
         params: params.iter().map(|s| s.to_string()).collect(),
         param_values: Default::default(),
+        limits: Default::default(),
         frames: 1,
         warmup: 0,
         reference: None,

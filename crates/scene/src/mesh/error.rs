@@ -21,9 +21,7 @@ pub enum MeshError {
         source: std::io::Error,
     },
     /// A count (triangles, vertices, bytes, objects, node depth) is over its limit.
-    #[error(
-        "{what}: {count}, more than the limit of {limit} (raise Limits::{field} with Scene::load_with_limits)"
-    )]
+    #[error("{what}: {count}, more than the limit of {limit} ({})", raise_hint(.field))]
     Limit {
         /// What was counted, with the element it belongs to.
         what: String,
@@ -86,4 +84,16 @@ pub(crate) fn invalid(element: impl Into<String>, problem: impl Into<String>) ->
         element: element.into(),
         problem: problem.into(),
     }
+}
+
+/// How a user raises the limit `field` (a [`crate::Limits`] field name, possibly
+/// followed by why it cannot be raised).
+fn raise_hint(field: &str) -> String {
+    if field.contains(' ') {
+        return format!("Limits::{field}");
+    }
+    format!(
+        "raise it with --{} on caustics run or caustics reference, or Limits::{field} through Scene::load_with_limits",
+        field.replace('_', "-")
+    )
 }
