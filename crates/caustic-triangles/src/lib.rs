@@ -71,6 +71,10 @@ fn pass_source(pass: &str) -> String {
 /// Registry name.
 pub const NAME: &str = "caustic-triangles";
 
+/// Profiling scope of the per-vertex ΔΦ/ΔA kernel (it shares the areas pass's shader
+/// and bind group, so it is recorded with `begin_as`).
+const VERTEX_IRRADIANCE_PASS: &str = "caustic-triangles/vertex_irradiance";
+
 method_params! {
     /// Parameters of `caustic-triangles` (defaults: the paper's §6 where it gives them).
     pub struct CausticTrianglesParams {
@@ -93,16 +97,7 @@ impl Method for CausticTriangles {
     const NAME: &'static str = NAME;
     const SUMMARY: &'static str = "photon hit image from the light, neighbouring hits as triangles with per-vertex irradiance in a cube map with distance (no light leaks), camera lookup";
     const SOURCE: &'static str = "Umenhoffer, Patow & Szirmay-Kalos, Caustic Triangles on the GPU (umenhoffer-patow-szirmay-kalos-caustic-triangles.txt)";
-    const CAPABILITIES: Capabilities = Capabilities {
-        surface: true,
-        volume: false,
-        reflection: true,
-        refraction: true,
-        multiple_bounces: false,
-        directional_light: true,
-        point_light: true,
-        spot_light: true,
-    };
+    const CAPABILITIES: Capabilities = photon_hits::CAPABILITIES;
 
     fn check_scene(scene: &Scene, _params: &CausticTrianglesParams) -> Result<(), Unsupported> {
         photon_hits::check_scene(scene)
@@ -309,7 +304,7 @@ impl CausticsMethod for CausticTriangles {
             .begin(frame)?
             .dispatch("triangle_areas", [self.triangle_count.div_ceil(64), 1, 1])?;
         self.areas
-            .begin_as(frame, &format!("{NAME}/vertex_irradiance"))?
+            .begin_as(frame, VERTEX_IRRADIANCE_PASS)?
             .dispatch(
                 "vertex_irradiance_pass",
                 [self.hits.texels().div_ceil(64), 1, 1],

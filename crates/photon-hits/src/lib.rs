@@ -46,7 +46,7 @@ use caustics_gpu::{
     Frame, GBuffer, GpuContext, GpuError, GpuScene, LightProjection, LightView, Renderer, shader,
 };
 use caustics_method::params::{above, closed};
-use caustics_method::{Counters, MethodError, Unsupported};
+use caustics_method::{Capabilities, Counters, MethodError, Unsupported};
 use caustics_scene::{Material, Scene, Shape, Vec3};
 
 /// Types shared by every photon-hit pass (`PhotonHit`, `CausticMapUniform`).
@@ -152,6 +152,19 @@ pub fn caustic_generator(scene: &Scene) -> Result<(usize, GeneratorKind), Unsupp
     }
     generator.ok_or_else(|| Unsupported("the scene has no specular object".into()))
 }
+
+/// What both photon-hit methods render: one reflecting or refracting generator seen
+/// by one light of any kind, surface caustics only (Umenhoffer et al. §3).
+pub const CAPABILITIES: Capabilities = Capabilities {
+    surface: true,
+    volume: false,
+    reflection: true,
+    refraction: true,
+    multiple_bounces: false,
+    directional_light: true,
+    point_light: true,
+    spot_light: true,
+};
 
 /// Scene checks shared by both methods.
 pub fn check_scene(scene: &Scene) -> Result<(), Unsupported> {

@@ -77,16 +77,7 @@ impl Method for Splatting {
     const NAME: &'static str = NAME;
     const SUMMARY: &'static str = "the caustic-mapping baseline: the photon hits of caustic-triangles splatted as fixed kernels into the same cube map";
     const SOURCE: &'static str = "photon splatting as compared in Umenhoffer, Patow & Szirmay-Kalos, Caustic Triangles on the GPU, Fig. 1";
-    const CAPABILITIES: Capabilities = Capabilities {
-        surface: true,
-        volume: false,
-        reflection: true,
-        refraction: true,
-        multiple_bounces: false,
-        directional_light: true,
-        point_light: true,
-        spot_light: true,
-    };
+    const CAPABILITIES: Capabilities = photon_hits::CAPABILITIES;
 
     fn check_scene(scene: &Scene, _params: &SplattingParams) -> Result<(), Unsupported> {
         photon_hits::check_scene(scene)
