@@ -6,9 +6,11 @@
 //!
 //! Photons leave the lights aimed at the specular objects (see `emission.rs`
 //! for the weights), follow dielectrics (exact unpolarized Fresnel, Snell, TIR) and
-//! mirrors, and at their first diffuse hit after ≥ 1 specular event are connected to
-//! the pinhole (the formula and its derivation are in `sensor.rs`). It knows no GPU
-//! and no method, so it stays an independent check.
+//! mirrors (weighted by the adjoint shading-normal factor where interpolated or analytic
+//! normals differ from the facets, `tracer.rs`), and at their first diffuse hit after
+//! ≥ 1 specular event are connected to the pinhole (the formula and its derivation
+//! are in `sensor.rs`). It knows no GPU and no method, so it stays an independent
+//! check.
 //!
 //! ```
 //! use caustics_reference::{Reference, ReferenceOptions};

@@ -8,9 +8,19 @@
 //! Dielectrics choose reflection with probability R (exact unpolarized Fresnel, TIR
 //! included) and refraction otherwise, so the photon power is unchanged (all orders
 //! of internal reflection are traced); mirrors scale it by their reflectance. Paths
-//! stop after [`MAX_SPECULAR`] specular events, and where a shading normal would
-//! send the photon to the wrong side of the geometric surface (possible only on
-//! triangle objects, whose interpolated or analytic normals differ from the facets).
+//! stop after [`MAX_SPECULAR`] specular events.
+//!
+//! Shading normals (DESIGN.md "Shading normals in light transport"): specular
+//! directions are taken about the shading normal ns, which differs from the geometric
+//! normal ng on triangle objects (interpolated vertex normals, a heightfield's
+//! analytic normal; elsewhere ns = ng). Light transport with shading normals is not
+//! symmetric (Veach 1997, §5.3; pbrt-v3 §16.1.3), so each specular vertex multiplies
+//! the photon power, on top of the reflectance or the Fresnel choice, by the adjoint
+//! factor of [`shading_factor`], for reflection and refraction alike; and the photon
+//! is dropped exactly where ns and ng disagree about the side of ωi (where it came
+//! from) or of ωo (where it goes). The η² of refraction is a separate matter: photons
+//! carry flux, which crossing an interface keeps (times 1 − R), and they are turned
+//! into radiance only at the diffuse receiver (`sensor.rs`), so no η² enters.
 //!
 //! With a medium (filling the whole scene, inside dielectrics too, DESIGN "homogeneous
 //! everywhere"), each segment attenuates the photon by exp(−σt·ℓ) and the eye
@@ -95,6 +105,26 @@ fn splitmix(mut z: u64) -> u64 {
     z ^ (z >> 31)
 }
 
+/// The adjoint shading-normal factor of a specular vertex at `hit` for a photon that
+/// arrived from `wi` and leaves along `wo` (unit vectors, both pointing away from the
+/// surface): |ωi·ns|·|ωo·ng| / (|ωo·ns|·|ωi·ng|) (Veach 1997, §5.3, the adjoint BSDF
+/// with shading normals; pbrt-v3's `CorrectShadingNormal`). `None` where ns and ng
+/// disagree about the side of ωi or of ωo (a zero dot product counts as
+/// disagreeing), and the photon is dropped. 1 where ns = ng. For a mirror
+/// |ωi·ns| = |ωo·ns|, leaving |ωo·ng| / |ωi·ng|: the reflected beam's cross-section
+/// over the incident one.
+#[inline]
+fn shading_factor(wi: Vec3, wo: Vec3, hit: &Hit) -> Option<f32> {
+    let (i_s, i_g) = (wi.dot(hit.ns), wi.dot(hit.ng));
+    let (o_s, o_g) = (wo.dot(hit.ns), wo.dot(hit.ng));
+    if !(i_s * i_g > 0.0 && o_s * o_g > 0.0) {
+        return None;
+    }
+    let k = (i_s * o_g / (o_s * i_g)).abs();
+    // Finite for agreeing sides unless a product underflows; drop rather than splat NaN.
+    k.is_finite().then_some(k)
+}
+
 #[inline]
 fn exp3(v: Vec3) -> Vec3 {
     Vec3::new(v.x.exp(), v.y.exp(), v.z.exp())
@@ -161,11 +191,11 @@ impl Tracer<'_> {
                 }
                 _ if !caustic || specular >= MAX_SPECULAR => return,
                 Material::Mirror { reflectance } => {
-                    power *= Vec3::from(*reflectance);
                     let r = reflect(d, hit.ns);
-                    if r.dot(hit.ng) * d.dot(hit.ng) >= 0.0 {
+                    let Some(k) = shading_factor(-d, r, &hit) else {
                         return;
-                    }
+                    };
+                    power *= Vec3::from(*reflectance) * k;
                     d = r;
                 }
                 Material::Dielectric { ior } => {
@@ -176,14 +206,17 @@ impl Tracer<'_> {
                         (-hit.ns, *ior, 1.0)
                     };
                     let (r, cos_t) = fresnel(-d.dot(n), n1, n2);
-                    let (new_d, same_side) = if rng.next() < r {
-                        (reflect(d, n), false)
+                    // Drawn before any drop, so a dropped photon leaves the random
+                    // stream of the next ones as it was.
+                    let new_d = if rng.next() < r {
+                        reflect(d, n)
                     } else {
-                        (refract(d, n, n1 / n2, cos_t), true)
+                        refract(d, n, n1 / n2, cos_t)
                     };
-                    if (new_d.dot(hit.ng) * d.dot(hit.ng) > 0.0) != same_side {
+                    let Some(k) = shading_factor(-d, new_d, &hit) else {
                         return;
-                    }
+                    };
+                    power *= k;
                     d = new_d;
                 }
             }
@@ -300,5 +333,49 @@ impl Tracer<'_> {
                 rgb: v.to_array(),
             });
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn hit(ns: Vec3, ng: Vec3) -> Hit {
+        Hit {
+            t: 1.0,
+            p: Vec3::ZERO,
+            ng,
+            ns: ns.normalize(),
+            object: 0,
+        }
+    }
+
+    #[test]
+    fn shading_factor_is_one_without_shading_normals() {
+        let h = hit(Vec3::Y, Vec3::Y);
+        let wi = Vec3::new(0.3, 0.8, -0.1).normalize();
+        let wo = Vec3::new(-0.6, -0.5, 0.2).normalize();
+        assert_eq!(shading_factor(wi, wo, &h), Some(1.0));
+        assert_eq!(shading_factor(wi, reflect(-wi, Vec3::Y), &h), Some(1.0));
+    }
+
+    /// A mirror's factor is the ratio of the beams' cross-sections |ωo·ng| / |ωi·ng|;
+    /// a side on which ns and ng disagree drops the photon.
+    #[test]
+    fn shading_factor_of_a_mirror_and_the_wrong_sides() {
+        let ng = Vec3::Y;
+        let ns = Vec3::new(0.2, 1.0, 0.0).normalize();
+        let h = hit(ns, ng);
+        let wi = Vec3::new(-0.5, 0.6, 0.0).normalize();
+        let wo = reflect(-wi, ns);
+        let k = shading_factor(wi, wo, &h).expect("both sides agree");
+        assert!((k - wo.dot(ng) / wi.dot(ng)).abs() < 1e-6, "{k}");
+        assert!((k - 1.0).abs() > 0.05, "the tilt must matter: {k}");
+        // ωo grazing the facet from below while above per ns: dropped.
+        let low = Vec3::new(1.0, -0.05, 0.0).normalize();
+        assert!(low.dot(ns) > 0.0 && low.dot(ng) < 0.0);
+        assert_eq!(shading_factor(wi, low, &h), None);
+        // The same for ωi.
+        assert_eq!(shading_factor(low, wo, &h), None);
     }
 }
