@@ -29,9 +29,21 @@
 //!
 //! Scope: one light, one specular object (a mirror of any shape, a closed dielectric
 //! (sphere or mesh) with two refractions, or an open dielectric quad/heightfield with
-//! one), diffuse receivers of any shape. One specular event per interface: light
-//! reflected inside a refractor (total internal or Fresnel) is dropped, and so is a
-//! ray that meets a mirror generator a second time (the ring's opposite wall).
+//! one), diffuse receivers of any shape.
+//!
+//! **Light paths.** The paper's path (the default) has one specular event per
+//! interface: light reflected inside a refractor (total internal or Fresnel) is
+//! dropped, so is the Fresnel reflection off the first interface, and so is a ray that
+//! meets a mirror generator a second time (the ring's opposite wall). Two parameters
+//! extend it ([`PhotonHitConfig::bounces`], [`PhotonHitConfig::fresnel_reflection`]):
+//! each further path gets a *sheet* of the hit image of its own (the light leaving a
+//! closed refractor after j internal reflections is sheet j; the reflection off the
+//! first interface is the last sheet), so every sheet is one smooth specular path,
+//! triangles form within a sheet only and both methods reconstruct all sheets into
+//! the one cube map. A mirror path does not branch: its further reflections stay in
+//! sheet 0 with path ids of their own. An open refractor (water) has no inside to
+//! reflect in; `bounces` does not apply to it. Light leaving a closed refractor that
+//! meets the generator again outside (a concave mesh) is not refracted again.
 
 mod cube_map;
 
@@ -82,6 +94,15 @@ const HIT_REASONS: [(&str, &str); 7] = [
     ("HIT_SPECULAR_RECEIVER", "photons_specular_receiver"),
 ];
 
+/// Most further specular events [`PhotonHitConfig::bounces`] allows (the counters
+/// buffer has one valid-hit counter per bounce order).
+pub const MAX_BOUNCES: u32 = 8;
+
+/// Index of the first counter after the `HIT_*` reasons: the Fresnel reflection's
+/// valid hits (trace.wgsl `COUNTER_REFLECTED`), then one per bounce order.
+const COUNTER_REFLECTED: usize = 8;
+const COUNTERS: usize = COUNTER_REFLECTED + 1 + MAX_BOUNCES as usize;
+
 caustics_method::method_params! {
     /// The settings shared by both photon-hit methods, a parameter group of each
     /// (defaults: Umenhoffer et al. §6 where they give them).
@@ -96,6 +117,10 @@ caustics_method::method_params! {
         distance_test: bool = true;
         /// distance test: |stored - actual| <= tolerance x actual
         distance_tolerance: f64 = 0.05 => above(0.0, 1.0);
+        /// further specular events followed on the generator: internal reflections in a closed refractor (Fresnel and total), further reflections off a mirror (paper: 0)
+        bounces: u32 = 0 => closed(0.0, 8.0);
+        /// also follow the Fresnel reflection off a dielectric's first interface (paper: false)
+        fresnel_reflection: bool = false;
     }
 }
 
@@ -160,7 +185,8 @@ pub const CAPABILITIES: Capabilities = Capabilities {
     volume: false,
     reflection: true,
     refraction: true,
-    multiple_bounces: false,
+    // With `bounces`: several specular events on the one generator.
+    multiple_bounces: true,
     directional_light: true,
     point_light: true,
     spot_light: true,
@@ -175,13 +201,29 @@ pub fn check_scene(scene: &Scene) -> Result<(), Unsupported> {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 struct TraceUniform {
-    layers: u32,
+    faces: u32,
     resolution: u32,
     generator: u32,
     flags: u32,
     center: [f32; 4],
     generator_center: [f32; 4],
     view: [f32; 4],
+    paths: [u32; 4],
+}
+
+/// The sheets of the hit image (one per specular path a texel's light may take, see
+/// the crate doc) for a generator of `kind` under `config`: (sheets, the Fresnel
+/// reflection's sheet).
+fn sheets(kind: GeneratorKind, config: &PhotonHitConfig) -> (u32, Option<u32>) {
+    let transmitted = match kind {
+        GeneratorKind::ClosedRefractor => 1 + config.bounces,
+        GeneratorKind::Mirror | GeneratorKind::OpenRefractor => 1,
+    };
+    match kind {
+        GeneratorKind::Mirror => (1, None),
+        _ if config.fresnel_reflection => (transmitted + 1, Some(transmitted)),
+        _ => (transmitted, None),
+    }
 }
 
 /// The scene's caustic generator as the photon passes see it.
@@ -233,26 +275,28 @@ impl Generator {
         })
     }
 
-    /// The tracing pass's uniform for a light view of `layers` faces of `resolution`².
+    /// The tracing pass's uniform for a light view of `faces` faces of `resolution`².
     fn trace_uniform(
         &self,
         view: &LightView,
         tan_half: f32,
-        resolution: u32,
-        layers: u32,
+        config: &PhotonHitConfig,
+        faces: u32,
         maps: &DistanceMaps,
     ) -> TraceUniform {
+        let (sheets, reflected) = sheets(self.kind, config);
         let flags = u32::from(self.kind == GeneratorKind::ClosedRefractor)
             | (u32::from(view.projection == LightProjection::Orthographic) << 1);
         let generator_reach = maps.generator.as_ref().map_or(0.0, |m| m.reach);
         TraceUniform {
-            layers,
-            resolution,
+            faces,
+            resolution: config.resolution,
             generator: self.index as u32,
             flags,
             center: self.center.extend(maps.receivers.reach).to_array(),
             generator_center: self.center.extend(generator_reach).to_array(),
             view: [view.texel_size, tan_half, 0.0, SEARCH_TOLERANCE],
+            paths: [config.bounces, sheets, reflected.unwrap_or(u32::MAX), 0],
         }
     }
 }
@@ -309,12 +353,19 @@ pub struct PhotonHits {
     light_gbuffer: GBuffer,
     maps: DistanceMaps,
     trace: ComputePass,
-    /// `array<PhotonHit>`, one per texel of every face of the light view (face-major,
-    /// then rows, then columns).
+    /// `array<PhotonHit>`, one per texel of every face of the light view and every
+    /// sheet (sheet-major, then faces, then rows, then columns).
     pub hits: wgpu::Buffer,
     counters: wgpu::Buffer,
-    /// Faces of the light view (1, or 6 for a light inside the generator's bounds).
+    /// Layers of the hit image: faces of the light view × sheets. Triangles and
+    /// neighbours never cross a layer.
     pub layers: u32,
+    /// Faces of the light view (1, or 6 for a light inside the generator's bounds).
+    pub faces: u32,
+    /// Sheets: specular paths a texel's light may take (1 on the paper's path).
+    pub sheets: u32,
+    /// Valid-hit counters to report beyond the reasons: (counter index, name).
+    order_counters: Vec<(usize, String)>,
     /// Texels per side of each face.
     pub resolution: u32,
     /// The distance maps' reference point: the generator's centre (m).
@@ -356,15 +407,17 @@ impl PhotonHits {
                 let light_gbuffer = renderer.gbuffer_pass().light_gbuffer(device, &view)?;
                 // §3: where a refracted ray leaves the generator and lands on a receiver.
                 let maps = DistanceMaps::new(ctx, gpu_scene, &g, config.distance_map_size)?;
-                let layers = light_gbuffer.layers();
-                let uniform = g.trace_uniform(&view, tan_half, config.resolution, layers, &maps);
-                let texels = layers as u64 * config.resolution as u64 * config.resolution as u64;
+                let faces = light_gbuffer.layers();
+                let uniform = g.trace_uniform(&view, tan_half, config, faces, &maps);
+                let texels = (faces * uniform.paths[1]) as u64
+                    * config.resolution as u64
+                    * config.resolution as u64;
                 Ok((
                     light_gbuffer,
                     maps,
                     uniform_buffer(device, "photon trace params", &uniform),
                     storage_buffer(device, "photon hits", texels * HIT_BYTES, false),
-                    storage_buffer(device, "photon trace counters", 4 * 8, true),
+                    storage_buffer(device, "photon trace counters", 4 * COUNTERS as u64, true),
                 ))
             })??;
         // §4.1: each texel's light reflected or refracted through the generator onto
@@ -399,10 +452,34 @@ impl PhotonHits {
             .build()?;
         let bytes =
             light_gbuffer.bytes() + maps.bytes() + hits.size() + counters.size() + uniform.size();
+        let (sheets, reflected) = sheets(g.kind, config);
+        let faces = light_gbuffer.layers();
+        let bounce_orders = match g.kind {
+            GeneratorKind::OpenRefractor => 0,
+            _ => config.bounces,
+        };
+        let order_counters = reflected
+            .map(|_| {
+                (
+                    COUNTER_REFLECTED,
+                    "photon_hits_fresnel_reflection".to_string(),
+                )
+            })
+            .into_iter()
+            .chain((1..=bounce_orders).map(|k| {
+                (
+                    COUNTER_REFLECTED + k as usize,
+                    format!("photon_hits_bounce_{k}"),
+                )
+            }))
+            .collect();
         Ok(Self {
             gbuffer_name: format!("{method}/light_gbuffer"),
             maps_name: format!("{method}/distance_maps"),
-            layers: light_gbuffer.layers(),
+            layers: faces * sheets,
+            faces,
+            sheets,
+            order_counters,
             reach: maps.receivers.reach,
             light_gbuffer,
             maps,
@@ -417,9 +494,14 @@ impl PhotonHits {
         })
     }
 
-    /// Texels of the photon hit image (all faces).
+    /// Texels of the photon hit image (all faces and sheets).
     pub fn texels(&self) -> u32 {
         self.layers * self.resolution * self.resolution
+    }
+
+    /// Texels of the light view (all faces): one tracing invocation each.
+    pub fn light_texels(&self) -> u32 {
+        self.faces * self.resolution * self.resolution
     }
 
     /// Records the light G-buffer, the two distance maps (rebuilt every frame, as
@@ -435,7 +517,7 @@ impl PhotonHits {
         self.maps.record(frame, &self.maps_name)?;
         frame.encoder.clear_buffer(&self.counters, 0, None);
         let mut pass = self.trace.begin(frame)?;
-        pass.dispatch("trace_photons", [self.texels().div_ceil(64), 1, 1])?;
+        pass.dispatch("trace_photons", [self.light_texels().div_ceil(64), 1, 1])?;
         Ok(())
     }
 
@@ -451,6 +533,9 @@ impl PhotonHits {
         out.insert("photon_texels".into(), self.texels() as u64);
         for ((_, name), v) in HIT_REASONS.iter().zip(&c) {
             out.insert((*name).into(), *v as u64);
+        }
+        for (index, name) in &self.order_counters {
+            out.insert(name.clone(), c[*index] as u64);
         }
         Ok(out)
     }
@@ -509,13 +594,14 @@ mod tests {
         caustics_gpu::assert_wgsl_layout!(
             compose(TRACE_WGSL),
             TraceUniform {
-                layers,
+                faces,
                 resolution,
                 generator,
                 flags,
                 center,
                 generator_center,
-                view
+                view,
+                paths
             }
         );
         caustics_gpu::assert_wgsl_layout!(
@@ -541,6 +627,50 @@ mod tests {
     }
 
     #[test]
+    fn counters_buffer_follows_the_wgsl_constants() {
+        let wgsl = compose(TRACE_WGSL);
+        let constant = |name| caustics_gpu::layout::wgsl_u32_constant(&wgsl, name).ok();
+        assert_eq!(
+            constant("COUNTER_REFLECTED"),
+            Some(COUNTER_REFLECTED as u32)
+        );
+        assert_eq!(
+            constant("COUNTER_BOUNCE"),
+            Some(COUNTER_REFLECTED as u32 + 1)
+        );
+        assert!(HIT_REASONS.len() <= COUNTER_REFLECTED);
+        // Every order of a path fits below the reflection's path id.
+        assert!(MAX_BOUNCES < constant("PATH_REFLECTED").unwrap_or(0));
+        assert_eq!(
+            PhotonHitConfig::specs()
+                .iter()
+                .find(|s| s.name == "bounces")
+                .and_then(|s| s.range),
+            Some(closed(0.0, MAX_BOUNCES as f64))
+        );
+    }
+
+    #[test]
+    fn sheets_follow_the_light_paths() {
+        let paper = PhotonHitConfig::default();
+        let extended = PhotonHitConfig {
+            bounces: 2,
+            fresnel_reflection: true,
+            ..paper.clone()
+        };
+        use GeneratorKind::*;
+        for (kind, config, want) in [
+            (ClosedRefractor, &paper, (1, None)),
+            (ClosedRefractor, &extended, (4, Some(3))),
+            (OpenRefractor, &paper, (1, None)),
+            (OpenRefractor, &extended, (2, Some(1))),
+            (Mirror, &extended, (1, None)),
+        ] {
+            assert_eq!(sheets(kind, config), want, "{kind:?} {config:?}");
+        }
+    }
+
+    #[test]
     fn bad_config_names_the_parameter() {
         let good = PhotonHitConfig {
             resolution: 128,
@@ -548,6 +678,8 @@ mod tests {
             cube_size: 512,
             distance_test: true,
             distance_tolerance: 0.05,
+            bounces: 0,
+            fresnel_reflection: false,
         };
         assert!(good.check().is_ok());
         for (bad, needle) in [
@@ -578,6 +710,13 @@ mod tests {
                     ..good
                 },
                 "distance_tolerance",
+            ),
+            (
+                PhotonHitConfig {
+                    bounces: MAX_BOUNCES + 1,
+                    ..good
+                },
+                "bounces",
             ),
         ] {
             let msg = bad.check().expect_err(needle);

@@ -7,10 +7,21 @@
 // map of the receivers around the generator's centre (the paper's layered distance
 // map of the environment). The texel's flux is the light's power through the texel
 // times the Fresnel transmittances or the mirror's reflectance (§4.1).
+//
+// That is the paper's path, sheet 0 of the hit image. Beyond it (off by default, the
+// `bounces` and `fresnel_reflection` parameters) each texel also follows:
+// * inside a closed refractor, the light reflected at the exit (Fresnel, or all of it
+//   under total internal reflection), up to `bounces` internal reflections; the light
+//   leaving after j of them is sheet j, so each sheet is one smooth specular path and
+//   triangles never join two;
+// * off a mirror, further reflections on the generator itself (the ring's opposite
+//   wall), up to `bounces`, in sheet 0 with their own path id;
+// * off a dielectric, the Fresnel reflection at the first interface, in the last sheet.
+// Hit slot of (sheet, face, texel): (sheet × faces + face) × texels per face + texel.
 
 struct TraceUniform {
     // Faces of the light view (1 or 6).
-    layers: u32,
+    faces: u32,
     // Texels per side of a face.
     resolution: u32,
     // The caustic generator (object index).
@@ -25,6 +36,9 @@ struct TraceUniform {
     // y: tan of the half field of view (perspective); z unused;
     // w: search tolerance relative to a map's reach.
     view: vec4<f32>,
+    // x: further specular events followed on the generator (`bounces`); y: sheets of
+    // the hit image; z: the Fresnel-reflection sheet, or NONE; w unused.
+    paths: vec4<u32>,
 }
 
 const FLAG_CLOSED: u32 = 1u;
@@ -39,8 +53,16 @@ const FLAG_ORTHOGRAPHIC: u32 = 2u;
 @group(1) @binding(6) var receiver_map: texture_2d_array<f32>;
 @group(1) @binding(7) var receiver_ids: texture_2d_array<u32>;
 @group(1) @binding(8) var<storage, read_write> hits: array<PhotonHit>;
-// One counter per HIT_* reason.
+// One counter per HIT_* reason (per hit slot), then the valid hits of the Fresnel
+// reflection (COUNTER_REFLECTED) and of each further bounce k (COUNTER_BOUNCE + k - 1).
 @group(1) @binding(9) var<storage, read_write> trace_counters: array<atomic<u32>>;
+
+const COUNTER_REFLECTED: u32 = 8u;
+const COUNTER_BOUNCE: u32 = 9u;
+// Path ids: (generator × 2 + side) × PATH_ORDERS + order, where order is the number of
+// specular events beyond the paper's path, or PATH_REFLECTED for the Fresnel reflection.
+const PATH_ORDERS: u32 = 16u;
+const PATH_REFLECTED: u32 = 15u;
 
 // Refracts unit `d` at a surface with outward normal `n_out` of a dielectric of index
 // `ior` (outside 1.0). xyz: new direction; w: Fresnel transmittance, or -1 under total
@@ -83,20 +105,61 @@ fn trace_receiver(o: vec3<f32>, d: vec3<f32>) -> ImpostorHit {
     return hit;
 }
 
-fn store_invalid(i: u32, why: u32) {
+fn store_invalid(slot: u32, why: u32) {
     var h: PhotonHit;
     h.ids = vec4<u32>(NONE, 0u, why, 0u);
-    hits[i] = h;
+    hits[slot] = h;
     atomicAdd(&trace_counters[why], 1u);
+}
+
+// Hit slot of `sheet` for the texel at `texel_slot` of sheet 0.
+fn sheet_slot(texel_slot: u32, sheet: u32) -> u32 {
+    return texel_slot + sheet * tu.faces * tu.resolution * tu.resolution;
+}
+
+// Light leaving the generator at `p` along `d` with `flux`: the receiver it lands on,
+// stored in `slot`; false (and the slot invalid) where it lands on none.
+fn land(slot: u32, p: vec3<f32>, d: vec3<f32>, flux: vec3<f32>, path: u32, footprint: f32) -> bool {
+    // The receiver: the distance map of the diffuse objects around the centre.
+    let c = tu.center.xyz;
+    let hit = trace_receiver(p, d);
+    if !hit.found {
+        store_invalid(slot, HIT_NO_RECEIVER);
+        return false;
+    }
+    let receiver = impostor_object(receiver_ids, hit.position - c);
+    if receiver == NONE || materials[objects[receiver].material].kind != MAT_DIFFUSE {
+        store_invalid(slot, HIT_SPECULAR_RECEIVER);
+        return false;
+    }
+    var h: PhotonHit;
+    h.position = vec4<f32>(hit.position, length(hit.position - c));
+    h.normal = vec4<f32>(select(hit.normal, -hit.normal, dot(hit.normal, d) > 0.0), footprint);
+    h.flux = vec4<f32>(flux, 0.0);
+    h.ids = vec4<u32>(receiver, path, HIT_VALID, 0u);
+    hits[slot] = h;
+    atomicAdd(&trace_counters[HIT_VALID], 1u);
+    return true;
+}
+
+// A valid hit of a further bounce `order` (≥ 1) or of the reflection is also counted
+// on its own.
+fn count_order(order: u32) {
+    if order == PATH_REFLECTED {
+        atomicAdd(&trace_counters[COUNTER_REFLECTED], 1u);
+    } else if order > 0u {
+        atomicAdd(&trace_counters[COUNTER_BOUNCE + order - 1u], 1u);
+    }
 }
 
 @compute @workgroup_size(64)
 fn trace_photons(@builtin(global_invocation_id) gid: vec3<u32>) {
     let per_face = tu.resolution * tu.resolution;
     let i = gid.x;
-    if i >= per_face * tu.layers {
+    if i >= per_face * tu.faces {
         return;
     }
+    let sheets = tu.paths.y;
     let layer = i32(i / per_face);
     let k = i % per_face;
     let texel = vec2<i32>(i32(k % tu.resolution), i32(k / tu.resolution));
@@ -104,7 +167,9 @@ fn trace_photons(@builtin(global_invocation_id) gid: vec3<u32>) {
     let obj_id = textureLoad(light_ids, texel, layer, 0).x;
     if pos.w < 0.5 || obj_id != tu.generator {
         // The light meets nothing, or a diffuse object first: no caustic path here.
-        store_invalid(i, HIT_NOT_GENERATOR);
+        for (var s = 0u; s < sheets; s++) {
+            store_invalid(sheet_slot(i, s), HIT_NOT_GENERATOR);
+        }
         return;
     }
     let light = lights[0];
@@ -133,69 +198,90 @@ fn trace_photons(@builtin(global_invocation_id) gid: vec3<u32>) {
     let mat = materials[objects[tu.generator].material];
     let n_g = normalize(textureLoad(light_normal, texel, layer, 0).xyz);
     // Path id: the generator and the side of its surface the light met (the ring's
-    // inner and outer walls make two sheets that must not be joined by triangles).
-    let path = tu.generator * 2u + select(0u, 1u, dot(d, n_g) > 0.0);
-    var p = p0;
+    // inner and outer walls make two sheets that must not be joined by triangles),
+    // then the order of the path.
+    let path = (tu.generator * 2u + select(0u, 1u, dot(d, n_g) > 0.0)) * PATH_ORDERS;
+    let bounces = tu.paths.x;
     let gen_center = tu.generator_center.xyz;
+    let reach = tu.generator_center.w;
+    let tolerance = tu.view.w * reach;
     if mat.kind == MAT_MIRROR {
         // DESIGN: mirrors reflect with their reflectance at every angle, on both sides.
-        flux *= mat.color.xyz;
-        d = reflect(d, n_g);
-        // A second meeting with the generator (a ray crossing the ring to its other
-        // wall) is a second specular event, which this method does not follow. The
-        // search starts 5 % of the map's reach away so the reflection point itself
-        // (tessellated vs stored surface) is not taken for a crossing.
-        let reach = tu.generator_center.w;
-        let again = impostor_trace(generator_map, gen_center, p, d, 0.05 * reach, 2.0 * reach, tu.view.w * reach);
-        if again.found {
-            store_invalid(i, HIT_SECOND_BOUNCE);
-            return;
-        }
-    } else {
-        let r1 = refract_through(d, n_g, mat.ior);
-        if r1.w < 0.0 {
-            store_invalid(i, HIT_TIR);
-            return;
-        }
-        flux *= r1.w;
-        d = r1.xyz;
-        if (tu.flags & FLAG_CLOSED) != 0u {
-            // Exit point from the refractor's own distance map (§3). The search starts
-            // 5 % of the reach inside: chords through a sphere of index 1.5 are at
-            // least 1.49 R long, and the entry point must not count as the exit.
-            let reach = tu.generator_center.w;
-            let exit = impostor_trace(generator_map, gen_center, p, d, 0.05 * reach, 2.0 * reach, tu.view.w * reach);
-            if !exit.found {
-                store_invalid(i, HIT_NO_EXIT);
+        var p = p0;
+        var n = n_g;
+        for (var order = 0u; ; order++) {
+            flux *= mat.color.xyz;
+            d = reflect(d, n);
+            // A further meeting with the generator (a ray crossing the ring to its
+            // other wall) is a further specular event, followed up to `bounces`. The
+            // search starts 5 % of the map's reach away so the reflection point itself
+            // (tessellated vs stored surface) is not taken for a crossing.
+            let again = impostor_trace(generator_map, gen_center, p, d, 0.05 * reach, 2.0 * reach, tolerance);
+            if !again.found {
+                if land(i, p, d, flux, path + order, footprint) {
+                    count_order(order);
+                }
                 return;
             }
-            p = exit.position;
-            let r2 = refract_through(d, exit.normal, mat.ior);
-            if r2.w < 0.0 {
-                store_invalid(i, HIT_TIR);
+            if order >= bounces {
+                store_invalid(i, HIT_SECOND_BOUNCE);
                 return;
             }
-            flux *= r2.w;
-            d = r2.xyz;
+            p = again.position;
+            n = again.normal;
         }
     }
-    // The receiver: the distance map of the diffuse objects around the centre.
-    let c = tu.center.xyz;
-    let hit = trace_receiver(p, d);
-    if !hit.found {
-        store_invalid(i, HIT_NO_RECEIVER);
+    let r1 = refract_through(d, n_g, mat.ior);
+    if tu.paths.z != NONE {
+        // The light the first interface reflects (from outside no TIR: r1.w ≥ 0).
+        let reflected = sheet_slot(i, tu.paths.z);
+        if land(reflected, p0, reflect(d, n_g), flux * (1.0 - max(r1.w, 0.0)), path + PATH_REFLECTED, footprint) {
+            count_order(PATH_REFLECTED);
+        }
+    }
+    if r1.w < 0.0 {
+        for (var s = 0u; s <= bounces && s < sheets; s++) {
+            if s != tu.paths.z {
+                store_invalid(sheet_slot(i, s), HIT_TIR);
+            }
+        }
         return;
     }
-    let receiver = impostor_object(receiver_ids, hit.position - c);
-    if receiver == NONE || materials[objects[receiver].material].kind != MAT_DIFFUSE {
-        store_invalid(i, HIT_SPECULAR_RECEIVER);
+    flux *= r1.w;
+    d = r1.xyz;
+    if (tu.flags & FLAG_CLOSED) == 0u {
+        // An open refractor (water): the light stays in the medium below the surface.
+        if land(i, p0, d, flux, path, footprint) {
+            count_order(0u);
+        }
         return;
     }
-    var h: PhotonHit;
-    h.position = vec4<f32>(hit.position, length(hit.position - c));
-    h.normal = vec4<f32>(select(hit.normal, -hit.normal, dot(hit.normal, d) > 0.0), footprint);
-    h.flux = vec4<f32>(flux, 0.0);
-    h.ids = vec4<u32>(receiver, path, HIT_VALID, 0u);
-    hits[i] = h;
-    atomicAdd(&trace_counters[HIT_VALID], 1u);
+    // Exit points from the refractor's own distance map (§3). Each search starts 5 %
+    // of the reach inside: chords through a sphere of index 1.5 are at least 1.49 R
+    // long, and the point just left must not count as the next one.
+    var p = p0;
+    for (var order = 0u; order <= bounces; order++) {
+        let slot = sheet_slot(i, order);
+        let exit = impostor_trace(generator_map, gen_center, p, d, 0.05 * reach, 2.0 * reach, tolerance);
+        if !exit.found {
+            for (var s = order; s <= bounces; s++) {
+                store_invalid(sheet_slot(i, s), HIT_NO_EXIT);
+            }
+            return;
+        }
+        p = exit.position;
+        let r2 = refract_through(d, exit.normal, mat.ior);
+        var kept = 1.0;
+        if r2.w < 0.0 {
+            // Total internal reflection: all of the light goes on inside.
+            store_invalid(slot, HIT_TIR);
+        } else {
+            if land(slot, p, r2.xyz, flux * r2.w, path + order, footprint) {
+                count_order(order);
+            }
+            kept = 1.0 - r2.w;
+        }
+        flux *= kept;
+        d = reflect(d, exit.normal);
+    }
 }

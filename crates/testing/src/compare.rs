@@ -161,10 +161,16 @@ impl Comparison {
 /// here). No flux above 1.02: light the method does not model cannot be there. The
 /// relMSE bound is about twice the figure and refuses the image moved by one pixel.
 pub fn refracting_sphere(info: &MethodInfo) -> Comparison {
+    refracting_sphere_with(info, serde_json::json!({}))
+}
+
+/// [`refracting_sphere`] with the method's parameters `params` (e.g. the light paths
+/// beyond its paper's, which the reflected halo needs).
+pub fn refracting_sphere_with(info: &MethodInfo, params: serde_json::Value) -> Comparison {
     compare(
         info,
         crate::builtin("sphere_on_plane", 96, 72),
-        serde_json::json!({}),
+        params,
         &TEST_REFERENCE,
         4,
     )

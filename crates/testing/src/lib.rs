@@ -69,7 +69,9 @@ mod score;
 pub use artifacts::{Artifacts, target_dir};
 pub use caustics_metrics::{Errors, HdrImage, ToneMap, luminance};
 pub use caustics_reference::ReferenceOptions;
-pub use compare::{Bounds, Comparison, TEST_REFERENCE, compare, refracting_sphere, shifted};
+pub use compare::{
+    Bounds, Comparison, TEST_REFERENCE, compare, refracting_sphere, refracting_sphere_with, shifted,
+};
 pub use gpu::{Gpu, Measured, Scored, context};
 pub use reference::{ReferenceImages, reference};
 pub use scenes::{builtin, builtin_json, plane_hit, scene};
