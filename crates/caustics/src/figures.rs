@@ -809,7 +809,8 @@ mod tests {
         caustics_metrics::write_exr(&cache.join("stderr.exr"), &HdrImage::new(16, 12))
             .expect("exr");
         let meta = crate::references::ReferenceMeta {
-            schema_version: 1,
+            schema_version: 2,
+            transport_version: caustics_reference::TRANSPORT_VERSION,
             scene: scene.name.clone(),
             scene_hash: scene.hash_hex(),
             width: 16,

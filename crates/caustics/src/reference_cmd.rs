@@ -200,7 +200,8 @@ fn write(
         exr("direct.exr", d)?;
     }
     let meta = ReferenceMeta {
-        schema_version: 1,
+        schema_version: 2,
+        transport_version: caustics_reference::TRANSPORT_VERSION,
         scene: scene.name.clone(),
         scene_hash: scene.hash_hex(),
         width: scene.camera.width,

@@ -1,11 +1,14 @@
 //! The reference cache: `<root>/<scene>/<hash>-<width>x<height>/` holds `caustic.exr`,
 //! `stderr.exr`, `volume.exr` (scenes with a medium), `volume_stderr.exr` and
-//! `meta.json`. The key is the scene's content hash and resolution, so an edited scene
-//! never meets a stale reference; `caustics run` uses a cached reference on its own.
+//! `meta.json`. The key is the scene's content hash, the resolution and the reference's
+//! [`TRANSPORT_VERSION`] (`<hash>-<width>x<height>-t<version>`), so neither an edited
+//! scene nor a changed light tracer meets a stale reference; `caustics run` uses a
+//! cached reference on its own.
 
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
+use caustics_reference::TRANSPORT_VERSION;
 use caustics_scene::Scene;
 use serde::{Deserialize, Serialize};
 
@@ -22,6 +25,8 @@ pub struct ReferenceMeta {
     pub scene: String,
     /// Scene content hash the reference was rendered from.
     pub scene_hash: String,
+    /// The reference's light-transport version ([`TRANSPORT_VERSION`]).
+    pub transport_version: u32,
     /// Image width.
     pub width: u32,
     /// Image height.
@@ -70,7 +75,7 @@ impl CachedReference {
 /// The cache folder of `scene` under `root`.
 pub fn cache_dir(root: &Path, scene: &Scene) -> PathBuf {
     root.join(&scene.name).join(format!(
-        "{}-{}x{}",
+        "{}-{}x{}-t{TRANSPORT_VERSION}",
         scene.hash_hex(),
         scene.camera.width,
         scene.camera.height
@@ -91,13 +96,17 @@ pub fn find(root: &Path, scene: &Scene) -> Result<Option<CachedReference>> {
     let meta: ReferenceMeta = serde_json::from_str(&text)
         .with_context(|| format!("{}: not a reference meta.json", meta_path.display()))?;
     let (w, h) = (scene.camera.width, scene.camera.height);
-    if meta.scene_hash != scene.hash_hex() || (meta.width, meta.height) != (w, h) {
+    if meta.scene_hash != scene.hash_hex()
+        || (meta.width, meta.height) != (w, h)
+        || meta.transport_version != TRANSPORT_VERSION
+    {
         bail!(
-            "{}: made for scene hash {} at {}x{}, but the scene is {} at {w}x{h}",
+            "{}: made for scene hash {} at {}x{} by reference transport {}, but the scene is {} at {w}x{h} and the reference transport {TRANSPORT_VERSION}",
             meta_path.display(),
             meta.scene_hash,
             meta.width,
             meta.height,
+            meta.transport_version,
             scene.hash_hex()
         );
     }

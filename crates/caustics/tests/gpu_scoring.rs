@@ -211,7 +211,8 @@ fn a_cached_reference_is_found_by_scene_hash_and_used() {
     caustics_metrics::write_exr(&dir.join("caustic.exr"), &ones).expect("write");
     caustics_metrics::write_exr(&dir.join("stderr.exr"), &ones.scaled(0.01)).expect("write");
     let meta = ReferenceMeta {
-        schema_version: 1,
+        schema_version: 2,
+        transport_version: caustics_reference::TRANSPORT_VERSION,
         scene: scene.name.clone(),
         scene_hash: scene.hash_hex(),
         width: 64,
@@ -253,5 +254,22 @@ fn a_cached_reference_is_found_by_scene_hash_and_used() {
     assert!(
         err.contains("meta.json") && err.contains("0000000000000000"),
         "{err}"
+    );
+
+    // So is one made by another version of the reference's light transport; and the
+    // folder a new render goes to is another one, so no older image is ever found.
+    let mut older = meta.clone();
+    older.transport_version = caustics_reference::TRANSPORT_VERSION - 1;
+    std::fs::write(
+        dir.join("meta.json"),
+        serde_json::to_vec(&older).expect("json"),
+    )
+    .expect("write");
+    let err = run(&o).expect_err("older transport").to_string();
+    assert!(err.contains("reference transport"), "{err}");
+    let name = dir.file_name().and_then(|n| n.to_str()).unwrap_or_default();
+    assert!(
+        name.ends_with(&format!("-t{}", caustics_reference::TRANSPORT_VERSION)),
+        "{name}"
     );
 }

@@ -46,6 +46,12 @@
 //! `rand_xoshiro` gives xoshiro256++, a small fast generator with SplitMix64 seeding,
 //! so each work unit gets an independent stream from a hash of (seed, unit).
 
+/// Version of the light transport a reference image holds: bumped whenever a change
+/// moves what an image converges to, so that no cache serves an image the current
+/// tracer would not make (the harness's reference cache keys on it). 1: until the
+/// adjoint shading-normal factor; 2: with it (`tracer.rs`, DESIGN "Conventions").
+pub const TRANSPORT_VERSION: u32 = 2;
+
 mod accumulate;
 mod bvh;
 mod emission;
