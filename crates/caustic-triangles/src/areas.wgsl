@@ -7,6 +7,10 @@
 // receiver, followed the same specular path, have a non-zero area, and its area on the
 // receiver is at most max_stretch × half the mean texel footprint at the generator.
 //
+// A valid hit none of whose triangles is kept (an orphan: isolated by invalid
+// neighbours, e.g. total internal reflection around it) delivers nothing, as in the
+// paper; `splat_orphans` draws it as a one-texel splat instead (orphans.wgsl).
+//
 // ΔA of a vertex = (2 / n) × the summed receiver area of its n kept triangles: one
 // photon-image cell's worth of receiver area (six triangles of half a cell around an
 // interior vertex). Inside the lit region that is a third of the fan's area, which is
@@ -14,7 +18,11 @@
 // area times the mean of its three vertex values); at the edge of the lit region it
 // keeps the irradiance right instead of doubling it. The paper's "half of the total
 // area of the attached triangles" would, on this six-triangle fan, deliver 2/3 of the
-// flux.
+// flux. With `vertex_area` = third (AREA_THIRD), ΔA = (1/3) × the summed area instead,
+// the barycentric share: Σ over triangles of area × mean vertex value then equals
+// Σ over vertices of their flux, so every hit that keeps a triangle delivers all of
+// its light, at the price of edge vertices up to 3× (one triangle) brighter than the
+// lit region inside.
 
 @group(1) @binding(0) var<uniform> tri: TriUniform;
 @group(1) @binding(1) var<storage, read> hits: array<PhotonHit>;
@@ -96,8 +104,18 @@ fn vertex_irradiance_pass(@builtin(global_invocation_id) gid: vec3<u32>) {
         s = add_triangle(s, cell_triangle(layer, x, y - 1u) + 1u);
     }
     var e = vec3<f32>(0.0);
+    // w = 1 marks an orphan: a valid hit whose every triangle was discarded, whose
+    // flux no triangle carries (orphans.wgsl splats it when asked).
+    var orphan = 0.0;
     if s.count > 0.0 {
-        e = hits[v].flux.rgb * s.count / (2.0 * s.area);
+        if tri.vertex_area == AREA_THIRD {
+            e = hits[v].flux.rgb * 3.0 / s.area;
+        } else {
+            e = hits[v].flux.rgb * s.count / (2.0 * s.area);
+        }
+    } else if hits[v].ids.x != NONE {
+        orphan = 1.0;
+        atomicAdd(&tri_counters[ORPHAN_HITS], 1u);
     }
-    vertex_irradiance[v] = vec4<f32>(e, 0.0);
+    vertex_irradiance[v] = vec4<f32>(e, orphan);
 }

@@ -11,8 +11,12 @@ struct TriUniform {
     // area its light had at the generator (half a texel footprint) spans a
     // discontinuity of the light's path (a silhouette, a grazing exit).
     max_stretch: f32,
-    pad: u32,
+    // ΔA of a vertex: AREA_FAN or AREA_THIRD (areas.wgsl).
+    vertex_area: u32,
 }
+
+const AREA_FAN: u32 = 0u;
+const AREA_THIRD: u32 = 1u;
 
 const TRI_KEPT: u32 = 0u;
 const TRI_INVALID_VERTEX: u32 = 1u;
@@ -20,6 +24,9 @@ const TRI_RECEIVER_MISMATCH: u32 = 2u;
 const TRI_PATH_MISMATCH: u32 = 3u;
 const TRI_STRETCHED: u32 = 4u;
 const TRI_DEGENERATE: u32 = 5u;
+// After the TRI_* reasons: valid hits none of whose triangles is kept (their light is
+// lost unless `splat_orphans` splats them).
+const ORPHAN_HITS: u32 = 6u;
 
 fn cells_per_face() -> u32 {
     return (tri.resolution - 1u) * (tri.resolution - 1u);

@@ -16,10 +16,15 @@
 //! 2. `triangle_areas` (compute): the discard rule and each triangle's receiver area
 //!    (`areas.wgsl` states the rule);
 //! 3. `vertex_irradiance` (compute, the §5 per-vertex pass): ΔΦ/ΔA per vertex, with
-//!    ΔA = (2/n) × the area of its n kept triangles (one cell's worth);
+//!    ΔA = (2/n) × the area of its n kept triangles (one cell's worth; `vertex_area =
+//!    third` takes a third of it instead, which delivers every vertex's flux exactly);
 //! 4. `triangles` (raster, §4.2): all triangles into the six faces of the caustic
 //!    cube map, additive, irradiance and luminance × distance;
-//! 5. `camera_lookup` (§4.3): ρ/π · E at each camera pixel whose distance from the
+//! 5. `orphan_splats` (raster, only with `splat_orphans`): the hits none of whose
+//!    triangles was kept, each as a one-texel splat (`orphans.wgsl`), so their light is
+//!    not lost; the `photon_hits_without_triangles` counter says how many there are
+//!    either way;
+//! 6. `camera_lookup` (§4.3): ρ/π · E at each camera pixel whose distance from the
 //!    centre matches the map's (`distance_test`).
 //!
 //! The photon hit image is one light view fitted to the generator (a cube for a light
@@ -63,9 +68,17 @@ pub use photon_hits;
 const GRID_WGSL: &str = include_str!("grid.wgsl");
 const AREAS_WGSL: &str = include_str!("areas.wgsl");
 const TRIANGLES_WGSL: &str = include_str!("triangles.wgsl");
+const ORPHANS_WGSL: &str = include_str!("orphans.wgsl");
 
 fn pass_source(pass: &str) -> String {
     photon_hits::compose(&format!("{GRID_WGSL}\n{pass}"))
+}
+
+fn orphans_source() -> String {
+    photon_hits::compose(&format!(
+        "{}\n{ORPHANS_WGSL}",
+        photon_hits::SPLAT_KERNEL_WGSL
+    ))
 }
 
 /// Registry name.
@@ -89,6 +102,10 @@ method_params! {
         // off. It also stays a finite f32 on the GPU (1e308 became infinity there).
         /// discard triangles whose receiver area exceeds this x their area at the generator
         max_stretch: f64 = 1000.0 => closed(1.0, 1e6);
+        /// a vertex's receiver area: fan ((2/n) x its n kept triangles, the irradiance right at the lit region's edge) or third (1/3 of them, every hit's flux delivered exactly)
+        vertex_area: VertexArea = VertexArea::Fan;
+        /// splat the hits none of whose triangles is kept as one cube-map texel each, so their light is not lost (paper: false)
+        splat_orphans: bool = false;
     }
 }
 
@@ -119,8 +136,22 @@ struct TriUniform {
     layers: u32,
     resolution: u32,
     max_stretch: f32,
-    _pad: u32,
+    vertex_area: u32,
 }
+
+/// How a vertex's receiver area ΔA is taken from its kept triangles (areas.wgsl).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum VertexArea {
+    /// (2/n) × the area of its n kept triangles, one cell's worth: the irradiance is
+    /// right up to the edge of the lit region, whose vertices deliver n/6 of their flux.
+    Fan,
+    /// (1/3) × that area, each triangle's barycentric share: every vertex with a kept
+    /// triangle delivers all of its flux; edge vertices are brighter.
+    Third,
+}
+
+caustics_method::param_enum!(VertexArea, [VertexArea::Fan, VertexArea::Third]);
 
 /// The triangle counters: the counter at index `TRI_*` of grid.wgsl and its name (a
 /// test checks each constant's value is its index here).
@@ -136,12 +167,18 @@ const TRI_REASONS: [(&str, &str); 6] = [
     ("TRI_DEGENERATE", "triangles_dropped_degenerate"),
 ];
 
+/// The counter after the `TRI_*` reasons (grid.wgsl `ORPHAN_HITS`): valid hits none of
+/// whose triangles is kept.
+const ORPHAN_COUNTER: (&str, &str) = ("ORPHAN_HITS", "photon_hits_without_triangles");
+
 /// `caustic-triangles` bound to one scene.
 pub struct CausticTriangles {
     hits: PhotonHits,
     map: CausticMap,
     areas: ComputePass,
     triangles: RasterPass,
+    /// With `splat_orphans`: the one-texel splats of the hits no kept triangle carries.
+    orphans: Option<RasterPass>,
     buffers: TriangleBuffers,
     triangle_count: u32,
     bytes: u64,
@@ -165,6 +202,7 @@ impl TriangleBuffers {
         hits: &PhotonHits,
         triangle_count: u32,
         max_stretch: f64,
+        vertex_area: VertexArea,
     ) -> Result<Self, MethodError> {
         let device = &ctx.device;
         Ok(ctx.checked("caustic-triangles setup", || {
@@ -172,7 +210,10 @@ impl TriangleBuffers {
                 layers: hits.layers,
                 resolution: hits.resolution,
                 max_stretch: max_stretch as f32,
-                _pad: 0,
+                vertex_area: match vertex_area {
+                    VertexArea::Fan => 0,
+                    VertexArea::Third => 1,
+                },
             };
             Self {
                 uniform: uniform_buffer(device, "caustic triangles params", &uniform),
@@ -213,7 +254,13 @@ impl CausticTriangles {
         let map = CausticMap::new(ctx, renderer, NAME, hits.center, hits.reach, &params.hits)?;
         let n = hits.resolution;
         let triangle_count = hits.layers * (n - 1) * (n - 1) * 2;
-        let b = TriangleBuffers::new(ctx, &hits, triangle_count, params.max_stretch)?;
+        let b = TriangleBuffers::new(
+            ctx,
+            &hits,
+            triangle_count,
+            params.max_stretch,
+            params.vertex_area,
+        )?;
         // The discard rule and each triangle's receiver area, then ΔΦ/ΔA per vertex (§5).
         let areas_shader =
             Shader::new(ctx, "caustic-triangles areas.wgsl", pass_source(AREAS_WGSL))?;
@@ -259,12 +306,32 @@ impl CausticTriangles {
         )
         .fragment("fs_triangle", &[Some(additive_hdr_target())])
         .build()?;
+        let orphans = if params.splat_orphans {
+            let shader = Shader::new(ctx, "caustic-triangles orphans.wgsl", orphans_source())?;
+            Some(
+                RasterPass::builder(ctx, &format!("{NAME}/orphan_splats"), &shader, "vs_orphan")
+                    .frame(renderer)
+                    .bind(
+                        1,
+                        &[
+                            ("cm", map.uniform()),
+                            ("hits", &hits.hits),
+                            ("vertex_irradiance", &b.vertex_irradiance),
+                        ],
+                    )
+                    .fragment("fs_splat", &[Some(additive_hdr_target())])
+                    .build()?,
+            )
+        } else {
+            None
+        };
         let bytes = b.bytes() + hits.bytes() + map.bytes();
         Ok(Self {
             hits,
             map,
             areas,
             triangles,
+            orphans,
             buffers: b,
             triangle_count,
             bytes,
@@ -317,6 +384,14 @@ impl CausticsMethod for CausticTriangles {
                 pass.draw(0..3 * self.triangle_count, face..face + 1);
             }
         }
+        if let Some(orphans) = &self.orphans {
+            let target = self.map.added_attachment();
+            let mut pass = orphans.begin(frame, &target, None)?;
+            for face in 0..6 {
+                self.map.set_face(&mut pass, face);
+                pass.draw(0..6 * self.hits.texels(), face..face + 1);
+            }
+        }
         self.map.record_lookup(frame)
     }
 
@@ -332,6 +407,7 @@ impl CausticsMethod for CausticTriangles {
         for ((_, name), v) in TRI_REASONS.iter().zip(&c) {
             out.insert((*name).into(), *v as u64);
         }
+        out.insert(ORPHAN_COUNTER.1.into(), c[TRI_REASONS.len()] as u64);
         Ok(out)
     }
 
@@ -349,6 +425,7 @@ mod tests {
 
     #[test]
     fn shaders_validate() -> Result<(), String> {
+        shader::validate_wgsl("orphans.wgsl", &orphans_source())?;
         shader::validate_wgsl("areas.wgsl", &pass_source(AREAS_WGSL))?;
         shader::validate_wgsl("triangles.wgsl", &pass_source(TRIANGLES_WGSL))
     }
@@ -361,7 +438,7 @@ mod tests {
                 layers,
                 resolution,
                 max_stretch,
-                _pad
+                vertex_area
             }
         );
     }
@@ -375,6 +452,10 @@ mod tests {
                 "{constant}"
             );
         }
+        assert_eq!(
+            wgsl_u32_constant(&pass_source(AREAS_WGSL), ORPHAN_COUNTER.0).ok(),
+            Some(TRI_REASONS.len() as u32)
+        );
     }
 
     #[test]

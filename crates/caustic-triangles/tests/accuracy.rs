@@ -217,7 +217,7 @@ fn refracting_sphere_with_the_extended_light_paths_has_all_the_light() {
     // rule drops (texels whose every triangle is discarded deliver nothing).
     let c = caustics_testing::refracting_sphere_with(
         &caustics_method::registry_entry::<caustic_triangles::CausticTriangles>(),
-        serde_json::json!({"bounces": 2, "fresnel_reflection": true}),
+        serde_json::json!({"bounces": 2, "reflections": true}),
     );
     c.check(
         &artifacts!(),

@@ -1,12 +1,12 @@
 //! The photon hit image's light paths beyond the paper's (`bounces`,
-//! `fresnel_reflection`, the `photon_hits` crate doc), through `caustic-triangles`, which
+//! `reflections`, the `photon_hits` crate doc), through `caustic-triangles`, which
 //! reads the hits and per-vertex irradiance back: the Fresnel reflection's own sheet
 //! carries the analytic irradiance, the paper's sheet is untouched by the extension,
 //! and with enough bounces a glass sphere delivers all the light that enters it. On
 //! whatever adapter the machine has (lavapipe on CI; no adapter fails, never skips).
 
 use caustic_triangles::photon_hits::{PhotonHit, PhotonHitConfig};
-use caustic_triangles::{CausticTriangles, CausticTrianglesParams};
+use caustic_triangles::{CausticTriangles, CausticTrianglesParams, VertexArea};
 use caustics_gpu::RendererOptions;
 use caustics_scene::Scene;
 use caustics_testing::{Gpu, scene};
@@ -22,14 +22,14 @@ fn run_concrete(scene: Scene, params: &CausticTrianglesParams) -> (Gpu, CausticT
     (gpu, m)
 }
 
-fn params(resolution: u32, bounces: u32, fresnel_reflection: bool) -> CausticTrianglesParams {
+fn params(resolution: u32, bounces: u32, reflections: bool) -> CausticTrianglesParams {
     CausticTrianglesParams {
         hits: PhotonHitConfig {
             resolution,
             cube_size: 256,
             distance_map_size: 512,
             bounces,
-            fresnel_reflection,
+            reflections,
             ..Default::default()
         },
         ..Default::default()
@@ -200,4 +200,90 @@ fn enough_bounces_deliver_all_the_light_entering_a_glass_sphere() {
     // the light view's discretization of the sphere's solid angle (96² texels, the
     // silhouette's texels are in or out by their centre): 1 %.
     assert!((0.99..1.01).contains(&ratios[2]), "{ratios:?}");
+}
+
+#[test]
+fn splat_orphans_adds_exactly_the_light_no_triangle_carries() {
+    // The bumpy glass ball: total internal reflection isolates many hits of a coarse
+    // photon image, whose light the paper's discard rule loses.
+    let scene = caustics_testing::builtin("bumpy_glass", 32, 24);
+    let mut flux = Vec::new();
+    let mut orphans = (0u64, [0.0f64; 3]);
+    for splat_orphans in [false, true] {
+        let mut p = params(64, 0, false);
+        p.splat_orphans = splat_orphans;
+        let (gpu, m) = run_concrete(scene.clone(), &p);
+        let atlas = m.caustic_map().read_atlas(&gpu.ctx).expect("atlas");
+        flux.push(caustics_testing::photon_hits::flux_on_floor(
+            m.caustic_map(),
+            &atlas,
+            0.0,
+        ));
+        let counters = caustics_method::CausticsMethod::counters(&m, &gpu.ctx).expect("counters");
+        let hits = m.photon_hits().read_hits(&gpu.ctx).expect("hits");
+        let e_v = m.read_vertex_irradiance(&gpu.ctx).expect("irradiance");
+        let marked: Vec<&PhotonHit> = hits
+            .iter()
+            .zip(&e_v)
+            .filter(|(_, e)| e[3] == 1.0)
+            .map(|(h, _)| h)
+            .collect();
+        // Marked exactly where counted, and only valid hits.
+        assert_eq!(
+            counters["photon_hits_without_triangles"],
+            marked.len() as u64
+        );
+        assert!(marked.iter().all(|h| h.valid()));
+        let mut sum = [0.0f64; 3];
+        for h in &marked {
+            for (total, flux) in sum.iter_mut().zip(h.flux) {
+                *total += flux as f64;
+            }
+        }
+        orphans = (marked.len() as u64, sum);
+    }
+    let (count, orphan_flux) = orphans;
+    eprintln!(
+        "bumpy_glass, 64² hits: {count} orphans carrying {orphan_flux:?} W; map flux without {:?}, with {:?}",
+        flux[0], flux[1]
+    );
+    assert!(count > 50, "only {count} orphans");
+    for c in 0..3 {
+        let added = flux[1][c] - flux[0][c];
+        let rel = (added - orphan_flux[c]).abs() / orphan_flux[c];
+        // The one-texel kernel is normalized at its centre (splatting's 2e-3 bound).
+        assert!(
+            rel < 2e-3,
+            "channel {c}: added {added} W, orphans {} W",
+            orphan_flux[c]
+        );
+    }
+}
+
+#[test]
+fn third_vertex_areas_and_orphan_splats_deliver_every_hit() {
+    // The barycentric ΔA (a third of the kept triangles' area) with the orphans splatted:
+    // the map holds the flux of every valid hit; the default fan ΔA gives edge vertices
+    // n/6 of theirs, which on the bumpy ball's speckled hit image is a visible share.
+    let scene = caustics_testing::builtin("bumpy_glass", 32, 24);
+    let mut ratios = Vec::new();
+    for vertex_area in [VertexArea::Fan, VertexArea::Third] {
+        let mut p = params(64, 0, false);
+        p.splat_orphans = true;
+        p.vertex_area = vertex_area;
+        let (gpu, m) = run_concrete(scene.clone(), &p);
+        let atlas = m.caustic_map().read_atlas(&gpu.ctx).expect("atlas");
+        let on_floor =
+            caustics_testing::photon_hits::flux_on_floor(m.caustic_map(), &atlas, 0.0)[1];
+        let hits = m.photon_hits().read_hits(&gpu.ctx).expect("hits");
+        ratios.push(on_floor / delivered(&hits));
+    }
+    eprintln!(
+        "map flux / valid hits' flux: fan {:.4}, third {:.4}",
+        ratios[0], ratios[1]
+    );
+    // Rasterizing triangles into cube-map texels (coverage by texel centre, Gouraud
+    // in between) and the one-texel splats' centre normalization: 1 %.
+    assert!((ratios[1] - 1.0).abs() < 0.01, "{ratios:?}");
+    assert!(ratios[0] < ratios[1] - 0.02, "{ratios:?}");
 }

@@ -121,6 +121,20 @@ impl CausticMap {
         })]
     }
 
+    /// The atlas as the colour attachment of a further reconstruction pass, which adds
+    /// to what the first one drew.
+    pub fn added_attachment(&self) -> [Option<wgpu::RenderPassColorAttachment<'_>>; 1] {
+        [Some(wgpu::RenderPassColorAttachment {
+            view: &self.atlas.view,
+            depth_slice: None,
+            resolve_target: None,
+            ops: wgpu::Operations {
+                load: wgpu::LoadOp::Load,
+                store: wgpu::StoreOp::Store,
+            },
+        })]
+    }
+
     /// Restricts drawing to face `face` of the atlas: clip space of that face's
     /// projection maps onto its square, and nothing spills onto a neighbour.
     pub fn set_face(&self, pass: &mut wgpu::RenderPass<'_>, face: u32) {

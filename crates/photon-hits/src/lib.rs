@@ -35,7 +35,7 @@
 //! interface: light reflected inside a refractor (total internal or Fresnel) is
 //! dropped, so is the Fresnel reflection off the first interface, and so is a ray that
 //! meets a mirror generator a second time (the ring's opposite wall). Two parameters
-//! extend it ([`PhotonHitConfig::bounces`], [`PhotonHitConfig::fresnel_reflection`]):
+//! extend it ([`PhotonHitConfig::bounces`], [`PhotonHitConfig::reflections`]):
 //! each further path gets a *sheet* of the hit image of its own (the light leaving a
 //! closed refractor after j internal reflections is sheet j; the reflection off the
 //! first interface is the last sheet), so every sheet is one smooth specular path,
@@ -67,6 +67,10 @@ pub const TYPES_WGSL: &str = include_str!("types.wgsl");
 pub const TRACE_WGSL: &str = include_str!("trace.wgsl");
 /// The camera pass.
 pub const LOOKUP_WGSL: &str = include_str!("lookup.wgsl");
+/// A hit drawn as a box kernel into the caustic cube map (`splat_vertex`, `fs_splat`):
+/// splatting's reconstruction, and caustic-triangles' for hits that join no triangle.
+/// The including pass binds `cm: CausticMapUniform`.
+pub const SPLAT_KERNEL_WGSL: &str = include_str!("splat_kernel.wgsl");
 
 /// A photon-hit pass's full WGSL: the shared GPU files, the impostor search, the
 /// photon-hit types, then the pass.
@@ -120,7 +124,7 @@ caustics_method::method_params! {
         /// further specular events followed on the generator: internal reflections in a closed refractor (Fresnel and total), further reflections off a mirror (paper: 0)
         bounces: u32 = 0 => closed(0.0, 8.0);
         /// also follow the Fresnel reflection off a dielectric's first interface (paper: false)
-        fresnel_reflection: bool = false;
+        reflections: bool = false;
     }
 }
 
@@ -221,7 +225,7 @@ fn sheets(kind: GeneratorKind, config: &PhotonHitConfig) -> (u32, Option<u32>) {
     };
     match kind {
         GeneratorKind::Mirror => (1, None),
-        _ if config.fresnel_reflection => (transmitted + 1, Some(transmitted)),
+        _ if config.reflections => (transmitted + 1, Some(transmitted)),
         _ => (transmitted, None),
     }
 }
@@ -585,6 +589,10 @@ mod tests {
 
     #[test]
     fn shaders_validate() -> Result<(), String> {
+        let kernel_user = format!(
+            "@group(1) @binding(0) var<uniform> cm: CausticMapUniform;\n{SPLAT_KERNEL_WGSL}"
+        );
+        shader::validate_wgsl("splat_kernel.wgsl", &compose(&kernel_user))?;
         shader::validate_wgsl("trace.wgsl", &compose(TRACE_WGSL))?;
         shader::validate_wgsl("lookup.wgsl", &compose(LOOKUP_WGSL))
     }
@@ -655,7 +663,7 @@ mod tests {
         let paper = PhotonHitConfig::default();
         let extended = PhotonHitConfig {
             bounces: 2,
-            fresnel_reflection: true,
+            reflections: true,
             ..paper.clone()
         };
         use GeneratorKind::*;
@@ -679,7 +687,7 @@ mod tests {
             distance_test: true,
             distance_tolerance: 0.05,
             bounces: 0,
-            fresnel_reflection: false,
+            reflections: false,
         };
         assert!(good.check().is_ok());
         for (bad, needle) in [

@@ -9,7 +9,7 @@
 // times the Fresnel transmittances or the mirror's reflectance (§4.1).
 //
 // That is the paper's path, sheet 0 of the hit image. Beyond it (off by default, the
-// `bounces` and `fresnel_reflection` parameters) each texel also follows:
+// `bounces` and `reflections` parameters) each texel also follows:
 // * inside a closed refractor, the light reflected at the exit (Fresnel, or all of it
 //   under total internal reflection), up to `bounces` internal reflections; the light
 //   leaving after j of them is sheet j, so each sheet is one smooth specular path and

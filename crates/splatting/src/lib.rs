@@ -189,7 +189,7 @@ impl CausticsMethod for Splatting {
 }
 
 fn splat_source() -> String {
-    photon_hits::compose(SPLAT_WGSL)
+    photon_hits::compose(&format!("{}\n{SPLAT_WGSL}", photon_hits::SPLAT_KERNEL_WGSL))
 }
 
 #[cfg(test)]

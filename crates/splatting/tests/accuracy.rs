@@ -5,40 +5,10 @@
 //! images, photon images and cube maps keep them fast.
 
 use caustics_gpu::RendererOptions;
-use caustics_scene::Vec3;
+use caustics_testing::photon_hits::flux_on_floor;
 use caustics_testing::{Bounds, Gpu, artifacts, builtin, refracting_sphere};
-use photon_hits::{CausticMap, PhotonHit, PhotonHitConfig};
+use photon_hits::{PhotonHit, PhotonHitConfig};
 use splatting::{Splatting, SplattingParams};
-
-/// Σ over the atlas texels of E × the texel's area on the floor plane y = `floor_y`.
-fn flux_on_floor(map: &CausticMap, atlas: &[f32], floor_y: f32) -> [f64; 3] {
-    let s = map.size;
-    let width = 3 * s;
-    let mut total = [0.0f64; 3];
-    for face in 0..6u32 {
-        let inv = map.faces[face as usize].inverse();
-        let (ox, oy) = photon_hits::face_origin(face, s);
-        for ty in 0..s {
-            for tx in 0..s {
-                let k = 4 * ((oy + ty) * width + ox + tx) as usize;
-                if atlas[k] == 0.0 && atlas[k + 1] == 0.0 && atlas[k + 2] == 0.0 {
-                    continue;
-                }
-                let a = 2.0 * (tx as f32 + 0.5) / s as f32 - 1.0;
-                let b = 1.0 - 2.0 * (ty as f32 + 0.5) / s as f32;
-                let w = (inv.project_point3(Vec3::new(a, b, 0.5)) - map.center).normalize();
-                assert!(w.y < 0.0, "light in a texel looking away from the floor");
-                let dist = (floor_y - map.center.y) / w.y;
-                let omega = (2.0 / s as f64).powi(2) / (1.0 + (a * a + b * b) as f64).powf(1.5);
-                let area = omega * (dist as f64).powi(2) / (-w.y as f64);
-                for c in 0..3 {
-                    total[c] += atlas[k + c] as f64 * area;
-                }
-            }
-        }
-    }
-    total
-}
 
 #[test]
 fn splatting_conserves_the_photon_flux_for_every_kernel() {
@@ -113,7 +83,7 @@ fn refracting_sphere_with_the_extended_light_paths_has_all_the_light() {
     // noise in relMSE and HDR-FLIP.
     let c = caustics_testing::refracting_sphere_with(
         &caustics_method::registry_entry::<splatting::Splatting>(),
-        serde_json::json!({"bounces": 2, "fresnel_reflection": true}),
+        serde_json::json!({"bounces": 2, "reflections": true}),
     );
     c.check(
         &artifacts!(),

@@ -7,7 +7,8 @@
 
 use caustics_method::MethodInfo;
 use caustics_metrics::HdrImage;
-use caustics_scene::Scene;
+use caustics_scene::{Scene, Vec3};
+use photon_hits::CausticMap;
 
 use crate::{Gpu, Measured, builtin, plane_hit};
 
@@ -116,4 +117,38 @@ pub fn parameters_refused(info: &MethodInfo, cases: &[(serde_json::Value, &str)]
             "{param}: {msg}"
         );
     }
+}
+
+/// Σ over the texels of a read-back caustic map `atlas` of E × the texel's area on the
+/// floor plane y = `floor_y`: the flux a reconstruction put on the floor (W per channel).
+///
+/// # Panics
+/// Where a lit texel looks away from the floor.
+pub fn flux_on_floor(map: &CausticMap, atlas: &[f32], floor_y: f32) -> [f64; 3] {
+    let s = map.size;
+    let width = 3 * s;
+    let mut total = [0.0f64; 3];
+    for face in 0..6u32 {
+        let inv = map.faces[face as usize].inverse();
+        let (ox, oy) = photon_hits::face_origin(face, s);
+        for ty in 0..s {
+            for tx in 0..s {
+                let k = 4 * ((oy + ty) * width + ox + tx) as usize;
+                if atlas[k] == 0.0 && atlas[k + 1] == 0.0 && atlas[k + 2] == 0.0 {
+                    continue;
+                }
+                let a = 2.0 * (tx as f32 + 0.5) / s as f32 - 1.0;
+                let b = 1.0 - 2.0 * (ty as f32 + 0.5) / s as f32;
+                let w = (inv.project_point3(Vec3::new(a, b, 0.5)) - map.center).normalize();
+                assert!(w.y < 0.0, "light in a texel looking away from the floor");
+                let dist = (floor_y - map.center.y) / w.y;
+                let omega = (2.0 / s as f64).powi(2) / (1.0 + (a * a + b * b) as f64).powf(1.5);
+                let area = omega * (dist as f64).powi(2) / (-w.y as f64);
+                for c in 0..3 {
+                    total[c] += atlas[k + c] as f64 * area;
+                }
+            }
+        }
+    }
+    total
 }
