@@ -10,6 +10,9 @@
 //! kernel. A small kernel leaves the dots of individual photons, a large one blurs the
 //! caustic: the paper's argument that no single splat size fits an uneven photon
 //! density, which the `umenhoffer-fig1` experiment of `caustics reproduce` sweeps.
+//! The paper gives no size; the default (`kernel_px = 0`) is four hit-image texels
+//! wide, 4 × cube_size / resolution cube-map texels, the best kernel of the
+//! `splatting-kernel` sweep at every hit resolution ([`KERNEL_PER_HIT_TEXEL`]).
 //!
 //! Passes (names `splatting/<pass>`): `light_gbuffer`, `distance_maps`,
 //! `trace_photons`, `splat` (raster, all six faces in one pass), `camera_lookup`.
@@ -57,8 +60,8 @@ method_params! {
         group
         /// The photon hit image, distance maps and cube map, as `caustic-triangles`.
         hits: PhotonHitConfig;
-        /// splat kernel side in cube-map texels
-        kernel_px: u32 = 4 => closed(1.0, 64.0);
+        /// splat kernel side in cube-map texels; 0 = chosen from the hit image: 4 x cube_size / resolution (the splatting-kernel experiment's best at every hit resolution)
+        kernel_px: u32 = 0 => closed(0.0, 64.0);
     }
     check = |p: &SplattingParams| {
         if p.kernel_px > p.hits.cube_size {
@@ -70,6 +73,35 @@ method_params! {
             Ok(())
         }
     };
+}
+
+/// Kernel side (cube-map texels) per hit-image texel spacing of [`auto_kernel_px`].
+///
+/// Chosen from the `splatting-kernel` experiment (bench/experiments, results in
+/// results/reproduce/splatting-kernel): kernels of 1-32 texels at hit images of 64²,
+/// 128² and 256² (cube faces of 512²) on every built-in scene splatting renders, scored
+/// against the CPU reference at 128×96 with 16 samples per pixel. The kernel with the
+/// lowest mean HDR-FLIP and the lowest geometric-mean relMSE over the scenes was 24-32
+/// texels at 64² hits, 16 at 128², 8 at 256²: in each case 4 × cube_size / resolution,
+/// a kernel four hit-image texels wide. Smaller kernels leave the photons' dots (the old
+/// fixed 4 texels at 128² hits: water_pool HDR-FLIP 0.357 against 0.134 at 16), larger
+/// ones blur the foci. Measured at 128×96: at larger camera resolutions a blur shows
+/// more, and a smaller kernel may win there.
+pub const KERNEL_PER_HIT_TEXEL: u32 = 4;
+
+/// The kernel `kernel_px = 0` stands for: [`KERNEL_PER_HIT_TEXEL`] × cube_size /
+/// resolution, rounded, within 1..=64 and the cube face.
+pub fn auto_kernel_px(hits: &PhotonHitConfig) -> u32 {
+    let k = (KERNEL_PER_HIT_TEXEL * hits.cube_size + hits.resolution / 2) / hits.resolution;
+    k.clamp(1, 64.min(hits.cube_size))
+}
+
+/// The kernel `params` ask for, `kernel_px = 0` resolved.
+pub fn kernel_px(params: &SplattingParams) -> u32 {
+    match params.kernel_px {
+        0 => auto_kernel_px(&params.hits),
+        k => k,
+    }
 }
 
 impl Method for Splatting {
@@ -123,7 +155,7 @@ impl Splatting {
             .create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("splat params"),
                 contents: bytemuck::bytes_of(&SplatUniform {
-                    kernel_px: params.kernel_px,
+                    kernel_px: kernel_px(params),
                     _pad: [0; 3],
                 }),
                 usage: wgpu::BufferUsages::UNIFORM,
@@ -147,7 +179,7 @@ impl Splatting {
             hits,
             map,
             splat_pass,
-            kernel_px: params.kernel_px,
+            kernel_px: kernel_px(params),
             bytes,
         })
     }
@@ -211,7 +243,7 @@ mod tests {
     #[test]
     fn bad_params_are_errors_naming_the_parameter() {
         for (json, needle) in [
-            (serde_json::json!({"kernel_px": 0}), "kernel_px"),
+            (serde_json::json!({"kernel_px": -1}), "kernel_px"),
             (serde_json::json!({"kernel_px": 65}), "kernel_px"),
             (
                 serde_json::json!({"kernel_px": 32, "cube_size": 16}),
@@ -226,5 +258,28 @@ mod tests {
             assert!(msg.contains(needle) && msg.contains(NAME), "{msg}");
         }
         assert!(parse::<SplattingParams>(NAME, &serde_json::Value::Null).is_ok());
+    }
+
+    #[test]
+    fn the_default_kernel_is_four_hit_texels_wide() {
+        let at = |resolution, cube_size| {
+            kernel_px(&SplattingParams {
+                hits: PhotonHitConfig {
+                    resolution,
+                    cube_size,
+                    ..Default::default()
+                },
+                ..Default::default()
+            })
+        };
+        // The sweep's best kernels at 512² cube faces.
+        assert_eq!((at(64, 512), at(128, 512), at(256, 512)), (32, 16, 8));
+        // Bounded by the parameter's range and the face; an explicit kernel is kept.
+        assert_eq!((at(2, 2048), at(1024, 16)), (64, 1));
+        let explicit = SplattingParams {
+            kernel_px: 3,
+            ..Default::default()
+        };
+        assert_eq!(kernel_px(&explicit), 3);
     }
 }
