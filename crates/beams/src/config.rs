@@ -24,6 +24,12 @@ caustics_method::param_enum!(HullKind, [HullKind::Prism, HullKind::Tight]);
 /// Most refinement levels (the control buffer counts beams of levels 0..=4).
 pub const MAX_LEVELS: u32 = 4;
 
+/// Most further specular events [`BeamParams::bounces`] allows: the photon-hit methods'
+/// bound, so one experiment sets every method alike. Each internal reflection is a
+/// beam family of its own (one bit of a leaf's action word, one control counter, and
+/// three more corner paths traced per leaf in `decide` and `emit`).
+pub const MAX_BOUNCES: u32 = 8;
+
 method_params! {
     /// The settings both beam methods share, a parameter group of each (the defaults
     /// here are `static-grid`'s; `adaptive-beams` states its own grid and hull).
@@ -40,6 +46,8 @@ method_params! {
         max_beams: u32 = 1 << 16 => closed(1.0, 4194304.0);
         /// also trace the Fresnel-reflected beams of dielectrics
         reflections: bool = true;
+        /// further specular events beyond the paper's path (two refractions, Sect. 6): internal reflections in a closed refractor (Fresnel and total; each count a beam family of its own), total internal reflection elsewhere, a generator met again (a ring's opposite wall, a concave mesh) (paper: 0; bound: one beam family and counter per internal reflection, each traced for every leaf)
+        bounces: u32 = 0 => closed(0.0, MAX_BOUNCES as f64);
         /// sigma (px) of the low-pass filter on the surface caustic (Sect. 7), 0 = off (bound: a (4 sigma + 1)^2 gather per pixel)
         surface_filter_px: f64 = 1.0 => closed(0.0, 16.0);
         /// soft-particle fade of volume caustics near surfaces (m), 0 = off (segments are clipped exactly; bound: longer than any scene)
@@ -146,6 +154,25 @@ mod tests {
         assert!(
             BeamParams {
                 max_beams: 512,
+                ..p
+            }
+            .check()
+            .is_ok()
+        );
+    }
+
+    #[test]
+    fn bounces_default_to_the_papers_path_and_are_bounded() {
+        assert_eq!(BeamParams::default().bounces, 0);
+        let p = BeamParams {
+            bounces: MAX_BOUNCES + 1,
+            ..BeamParams::default()
+        };
+        let e = p.check().expect_err("one family and counter per bounce");
+        assert!(e.contains("bounces"), "{e}");
+        assert!(
+            BeamParams {
+                bounces: MAX_BOUNCES,
                 ..p
             }
             .check()

@@ -5,10 +5,27 @@
 
 use caustics_method::Counters;
 
-use crate::MAX_LEVELS;
+use crate::{MAX_BOUNCES, MAX_LEVELS};
 
 /// Words of the control buffer (reset to zero every frame).
-pub(crate) const CONTROL_WORDS: usize = 32;
+pub(crate) const CONTROL_WORDS: usize = 48;
+
+/// Light-path families of a leaf (path.wgsl `FAMILY_*`): the main path, the Fresnel
+/// reflection at the first interface, one per internal reflection count 1..=MAX_BOUNCES.
+pub(crate) const FAMILIES: usize = 2 + MAX_BOUNCES as usize;
+
+/// How many words a [`Word`] spans, and how its counters are named.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Span {
+    /// One word.
+    One,
+    /// One word per refinement level 0..=MAX_LEVELS, reported as `<counter>_<level>`
+    /// for each level run.
+    Levels,
+    /// One word per light-path family, reported as `<counter>_main`,
+    /// `<counter>_fresnel_reflection` and `<counter>_internal_<j>` for j = 1..=bounces.
+    Families,
+}
 
 /// One word, or one word per refinement level, of the control buffer.
 #[derive(Clone, Copy, Debug)]
@@ -17,11 +34,10 @@ pub(crate) struct Word {
     pub(crate) wgsl: &'static str,
     /// Its index in the control buffer.
     pub(crate) index: usize,
-    /// The counter it is reported as, if any; a per-level word is reported as
-    /// `<counter>_<level>` for each level run.
+    /// The counter it is reported as, if any (a run of words: see [`Span`]).
     pub(crate) counter: Option<&'static str>,
-    /// One word per level 0..=MAX_LEVELS instead of one.
-    pub(crate) per_level: bool,
+    /// The words it spans.
+    pub(crate) span: Span,
     /// What it holds.
     pub(crate) doc: &'static str,
 }
@@ -32,7 +48,7 @@ const fn state(wgsl: &'static str, index: usize, doc: &'static str) -> Word {
         wgsl,
         index,
         counter: None,
-        per_level: false,
+        span: Span::One,
         doc,
     }
 }
@@ -50,7 +66,7 @@ pub(crate) const LEVEL: Word = counter("C_LEVEL", 8, "levels_run", "refinement l
 /// Beams written so far.
 pub(crate) const BEAM_TOTAL: Word = counter("C_BEAM_TOTAL", 12, "beams", "beams after this level");
 
-/// Every word, by index (words 0 to 7 and from 29 on are unused).
+/// Every word, by index (words 0 to 7, 29 to 31 and from 44 on are unused).
 #[rustfmt::skip]
 pub(crate) const CONTROL: &[Word] = &[
     LEVEL,
@@ -60,7 +76,7 @@ pub(crate) const CONTROL: &[Word] = &[
     BEAM_TOTAL,
     counter("C_OVERFLOW_CANDIDATES", 13, "overflow_candidates", "children that found no room in the candidate list"),
     counter("C_OVERFLOW_BEAMS", 14, "overflow_beams", "beams that found no room in the beam buffer"),
-    Word { per_level: true, ..counter("C_BEAMS_PER_LEVEL", 15, "beams_level", "beams emitted at each level") },
+    Word { span: Span::Levels, ..counter("C_BEAMS_PER_LEVEL", 15, "beams_level", "beams emitted at each level") },
     counter("C_TIGHT", 20, "hulls_tight", "beams with a tight six-triangle hull"),
     counter("C_PRISM", 21, "hulls_prism", "beams with a bounding prism"),
     counter("C_DROPPED_INVALID", 22, "dropped_invalid", "leaves none of whose corner paths is valid"),
@@ -70,15 +86,27 @@ pub(crate) const CONTROL: &[Word] = &[
     counter("C_SPLIT_CAMERA", 26, "splits_camera", "splits asked by the camera criterion"),
     counter("C_CANDIDATES_TOTAL", 27, "candidates", "grid triangles considered over all levels"),
     counter("C_DROPPED_NO_RECEIVER", 28, "dropped_no_receiver", "beam families that meet no receiver (without a medium)"),
+    Word { span: Span::Families, ..counter("C_BEAMS_PER_FAMILY", 32, "beams_path", "beams emitted of each light-path family") },
+    counter("C_BEAMS_REHIT", 42, "beams_path_rehit", "beams whose path meets a generator again (bounces)"),
+    counter("C_BEAMS_TIR", 43, "beams_path_tir", "beams whose path is totally internally reflected on the way (bounces)"),
 ];
 
 impl Word {
     fn words(&self) -> usize {
-        if self.per_level {
-            MAX_LEVELS as usize + 1
-        } else {
-            1
+        match self.span {
+            Span::One => 1,
+            Span::Levels => MAX_LEVELS as usize + 1,
+            Span::Families => FAMILIES,
         }
+    }
+}
+
+/// The counter name of light-path family `f` (path.wgsl `FAMILY_*`).
+fn family_name(prefix: &str, f: usize) -> String {
+    match f {
+        0 => format!("{prefix}_main"),
+        1 => format!("{prefix}_fresnel_reflection"),
+        _ => format!("{prefix}_internal_{}", f - 1),
     }
 }
 
@@ -88,10 +116,10 @@ pub(crate) fn wgsl() -> String {
         "// Words of `control`, generated from CONTROL in crates/beams/src/control.rs.\n",
     );
     for w in CONTROL {
-        let span = if w.per_level {
-            format!(" ({} words, levels 0..{MAX_LEVELS})", w.words())
-        } else {
-            String::new()
+        let span = match w.span {
+            Span::One => String::new(),
+            Span::Levels => format!(" ({} words, levels 0..{MAX_LEVELS})", w.words()),
+            Span::Families => format!(" ({} words, families 0..{})", w.words(), FAMILIES - 1),
         };
         out.push_str(&format!(
             "const {}: u32 = {}u; // {}{span}\n",
@@ -101,17 +129,26 @@ pub(crate) fn wgsl() -> String {
     out
 }
 
-/// The counters in the control words `c`, per-level ones for levels 0..=`levels`.
-pub(crate) fn counters(c: &[u32], levels: u32) -> Counters {
+/// The counters in the control words `c`, per-level ones for levels 0..=`levels`,
+/// per-family ones for the families traced with `bounces`.
+pub(crate) fn counters(c: &[u32], levels: u32, bounces: u32) -> Counters {
     let mut out = Counters::new();
     for w in CONTROL {
         let Some(name) = w.counter else { continue };
-        if w.per_level {
-            for level in 0..=levels as usize {
-                out.insert(format!("{name}_{level}"), u64::from(c[w.index + level]));
+        match w.span {
+            Span::One => {
+                out.insert(name.to_owned(), u64::from(c[w.index]));
             }
-        } else {
-            out.insert(name.to_owned(), u64::from(c[w.index]));
+            Span::Levels => {
+                for level in 0..=levels as usize {
+                    out.insert(format!("{name}_{level}"), u64::from(c[w.index + level]));
+                }
+            }
+            Span::Families => {
+                for f in 0..(2 + bounces as usize).min(FAMILIES) {
+                    out.insert(family_name(name, f), u64::from(c[w.index + f]));
+                }
+            }
         }
     }
     out
@@ -147,11 +184,27 @@ mod tests {
     #[test]
     fn counters_read_their_words() {
         let c: Vec<u32> = (0..CONTROL_WORDS as u32).collect();
-        let out = counters(&c, 2);
+        let out = counters(&c, 2, 2);
         assert_eq!(out["beams"], BEAM_TOTAL.index as u64);
         assert_eq!(out["levels_run"], LEVEL.index as u64);
         assert_eq!((out["beams_level_0"], out["beams_level_2"]), (15, 17));
         assert!(!out.contains_key("beams_level_3"));
         assert!(wgsl().contains("const C_BEAMS_PER_LEVEL: u32 = 15u;"));
+        // Families 0..=3 with two bounces: main, reflection, 1 and 2 internal reflections.
+        assert_eq!(
+            (
+                out["beams_path_main"],
+                out["beams_path_fresnel_reflection"],
+                out["beams_path_internal_1"],
+                out["beams_path_internal_2"]
+            ),
+            (32, 33, 34, 35)
+        );
+        assert!(!out.contains_key("beams_path_internal_3"));
+        assert_eq!((out["beams_path_rehit"], out["beams_path_tir"]), (42, 43));
+        let paper = counters(&c, 0, 0);
+        assert!(paper.contains_key("beams_path_fresnel_reflection"));
+        assert!(!paper.keys().any(|k| k.starts_with("beams_path_internal")));
+        assert!(wgsl().contains("const C_BEAMS_PER_FAMILY: u32 = 32u;"));
     }
 }

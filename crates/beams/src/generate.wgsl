@@ -20,7 +20,9 @@
 // The words of `control` (C_LEVEL, C_COUNT, ...) are declared once in control.rs,
 // which prepends their constants to this file.
 
-const ACTION_SPLIT: u32 = 4u;
+// An action word is ACTION_SPLIT or the mask of the families a leaf emits (bit f:
+// family f, up to FAMILY_INTERNAL + MAX_BOUNCES - 1).
+const ACTION_SPLIT: u32 = 0x80000000u;
 const SPLIT_DISCONTINUITY: u32 = 1u;
 const SPLIT_ENERGY: u32 = 2u;
 const SPLIT_CAMERA: u32 = 4u;
@@ -138,7 +140,10 @@ fn lands(k: Corners) -> bool {
     return u.sigma_t.w > 0.5 || k.p[0].end_object != NONE;
 }
 
-// Families a leaf emits: bit 0 the main path, bit 1 the Fresnel reflection.
+// Families a leaf emits: bit 0 the main path, bit 1 the Fresnel reflection, bit
+// FAMILY_INTERNAL + j - 1 the light reflected j times inside the first object
+// (`bounces`; Sect. 6 makes the reflected beam on the same refined grid, and so are
+// these: the split oracle looks at the main path only).
 fn leaf_mask(c: Candidate, main: Corners) -> u32 {
     var mask = 0u;
     if consistent(main) && corners_geometry(main).ok {
@@ -158,6 +163,21 @@ fn leaf_mask(c: Candidate, main: Corners) -> u32 {
                 mask |= 2u;
             } else {
                 atomicAdd(&control[C_DROPPED_NO_RECEIVER], 1u);
+            }
+        }
+    }
+    let slot = main.p[0].first_slot;
+    if u.bounces > 0u && slot != NONE && main.p[1].first_slot == slot && main.p[2].first_slot == slot
+        && u.specular[slot].kind == MAT_DIELECTRIC && u.specular[slot].closed == 1u {
+        for (var j = 1u; j <= u.bounces; j++) {
+            let family = FAMILY_INTERNAL + j - 1u;
+            let inner = trace_corners(c, family);
+            if consistent(inner) && corners_geometry(inner).ok {
+                if lands(inner) {
+                    mask |= 1u << family;
+                } else {
+                    atomicAdd(&control[C_DROPPED_NO_RECEIVER], 1u);
+                }
             }
         }
     }
@@ -295,7 +315,7 @@ fn action_counts(a: u32) -> vec2<u32> {
     if a == ACTION_SPLIT {
         return vec2<u32>(4u, 0u);
     }
-    return vec2<u32>(0u, (a & 1u) + ((a >> 1u) & 1u));
+    return vec2<u32>(0u, countOneBits(a));
 }
 
 // One workgroup: exclusive prefix sums of children and beams over the candidates, in
@@ -503,7 +523,7 @@ fn pack_tris(h: Hull) -> vec4<u32> {
     return words;
 }
 
-fn write_beam(slot: u32, c: Candidate, k: Corners, level: u32) {
+fn write_beam(slot: u32, c: Candidate, k: Corners, level: u32, family: u32) {
     let g = corners_geometry(k);
     var b: Beam;
     let ends = end_heights(k, g);
@@ -518,6 +538,11 @@ fn write_beam(slot: u32, c: Candidate, k: Corners, level: u32) {
         b.d[i] = vec4<f32>(g.d[i], ends[i]);
         b.flux[i] = vec4<f32>(k.p[i].weight * measure, 0.0);
     }
+    let rehits = k.p[0].rehits + k.p[1].rehits + k.p[2].rehits;
+    let tir = k.p[0].tir + k.p[1].tir + k.p[2].tir;
+    b.flux[0].w = f32(family);
+    b.flux[1].w = f32(rehits);
+    b.flux[2].w = f32(tir);
     b.n = vec4<f32>(g.n, y_max);
     let h = build_hull(v, top, g.n, y_max);
     for (var i = 0u; i < 6u; i++) {
@@ -527,6 +552,13 @@ fn write_beam(slot: u32, c: Candidate, k: Corners, level: u32) {
     beams[slot] = b;
     atomicAdd(&control[select(C_PRISM, C_TIGHT, h.tight)], 1u);
     atomicAdd(&control[C_BEAMS_PER_LEVEL + min(level, MAX_LEVELS)], 1u);
+    atomicAdd(&control[C_BEAMS_PER_FAMILY + min(family, FAMILY_INTERNAL + MAX_BOUNCES - 1u)], 1u);
+    if rehits > 0u {
+        atomicAdd(&control[C_BEAMS_REHIT], 1u);
+    }
+    if tir > 0u {
+        atomicAdd(&control[C_BEAMS_TIR], 1u);
+    }
 }
 
 @compute @workgroup_size(64)
@@ -559,12 +591,12 @@ fn emit(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     var slot = atomicLoad(&control[C_BEAM_BASE]) + off.y;
-    for (var family = 0u; family < 2u; family++) {
+    for (var family = 0u; family < FAMILY_INTERNAL + u.bounces; family++) {
         if (a & (1u << family)) == 0u {
             continue;
         }
         if slot < u.max_beams {
-            write_beam(slot, c, trace_corners(c, family), level);
+            write_beam(slot, c, trace_corners(c, family), level, family);
         }
         slot += 1u;
     }

@@ -55,7 +55,8 @@ pub(crate) struct BeamUniforms {
     impostor_tolerance: f32,
     scene_reach: f32,
     split_hit_px: f32,
-    _pad: [u32; 3],
+    bounces: u32,
+    _pad: [u32; 2],
 }
 
 /// Mirrors `FilterUniforms` in filter.wgsl.
@@ -91,7 +92,10 @@ pub struct BeamRecord {
     pub v: [[f32; 4]; 3],
     /// xyz: edge direction scaled to unit height; w: height where edge i meets a receiver.
     pub d: [[f32; 4]; 3],
-    /// rgb: flux (W) if every ray carried vertex i's weight.
+    /// rgb: flux (W) if every ray carried vertex i's weight; w of `flux[0]`: the
+    /// light-path family (0 main, 1 Fresnel reflection, 1 + j: j internal reflections),
+    /// of `flux[1]`: generators met again, of `flux[2]`: total internal reflections
+    /// (both summed over the three corner paths).
     pub flux: [[f32; 4]; 3],
     /// xyz: unit base normal; w: extrusion height y_max.
     pub n: [f32; 4],
@@ -99,6 +103,20 @@ pub struct BeamRecord {
     pub hull: [[f32; 4]; 6],
     /// 24 packed 4-bit hull indices; w: 1 tight, 0 prism.
     pub tris: [u32; 4],
+}
+
+impl BeamRecord {
+    /// The beam's light-path family: 0 the main path, 1 the Fresnel reflection at the
+    /// first interface, 1 + j the light reflected j times inside the first object.
+    pub fn family(&self) -> u32 {
+        self.flux[0][3] as u32
+    }
+
+    /// Further specular events on its corner paths (summed over the three): generators
+    /// met again, and total internal reflections.
+    pub fn further_events(&self) -> (u32, u32) {
+        (self.flux[1][3] as u32, self.flux[2][3] as u32)
+    }
 }
 
 /// One specular object's role in the pipeline.
@@ -244,7 +262,8 @@ impl BeamUniforms {
             impostor_tolerance: 0.01,
             scene_reach: 2.0 * bounds.bounding_sphere_radius().max(1e-3),
             split_hit_px: r.split_hit_px as f32,
-            _pad: [0; 3],
+            bounces: b.bounces,
+            _pad: [0; 2],
         }
     }
 }
@@ -296,6 +315,7 @@ mod tests {
                 impostor_tolerance,
                 scene_reach,
                 split_hit_px,
+                bounces,
             }
         );
         assert_wgsl_layout!(

@@ -39,10 +39,18 @@
 //!   soft-particle fade (Sect. 5.2) is optional (`soft_depth_m`, default off);
 //! - beam extrusion stops at the receiver found through the receivers' impostor, not
 //!   at an energy cut-off;
-//! - light that the paper drops is dropped here too: total internal reflection ends
-//!   a path, the Fresnel reflection at the exit surface is not followed, and a beam
-//!   that would meet the surface it just left again (concave generators, the inside
-//!   of a ring) passes through it.
+//! - light that the paper drops is dropped by default too: total internal reflection
+//!   ends a path, the Fresnel reflection at the exit surface is not followed, and a
+//!   beam that would meet the surface it just left again (concave generators, the
+//!   inside of a ring) passes through it. `bounces` (default 0, the paper's path)
+//!   follows up to that many further specular events, the photon-hit methods'
+//!   parameter of the same name: the light reflected j times inside the first object,
+//!   a closed refractor, is a beam family of its own (j = 1..=bounces, beside the main
+//!   path and the first interface's Fresnel reflection, on the same refined grid),
+//!   total internal reflections elsewhere are followed within a path, and so is a
+//!   generator met again. Counters `beams_path_main`, `beams_path_fresnel_reflection`,
+//!   `beams_path_internal_<j>`, `beams_path_rehit` and `beams_path_tir` say what each
+//!   kind delivered.
 
 //!
 //! Passes (names `<method>/<pass>`): `light_gbuffer`, `impostors`, `generate` (compute:
@@ -62,7 +70,7 @@ use caustics_gpu::{Frame, GBuffer, GpuContext, LightView, Renderer, shader};
 use caustics_method::{Capabilities, CausticsMethod, Counters, MethodError, Unsupported};
 use caustics_scene::{Scene, Vec3};
 
-pub use config::{BeamConfig, BeamParams, HullKind, MAX_LEVELS, Refinement};
+pub use config::{BeamConfig, BeamParams, HullKind, MAX_BOUNCES, MAX_LEVELS, Refinement};
 use control::CONTROL_WORDS;
 pub use gpu_types::BeamRecord;
 use gpu_types::{BEAM_BYTES, BeamUniforms, CANDIDATE_BYTES, FilterUniforms, Slot};
@@ -76,7 +84,7 @@ const FILTER_WGSL: &str = include_str!("filter.wgsl");
 /// types.wgsl after the limits it sizes its arrays and counters with.
 fn types_wgsl() -> String {
     format!(
-        "const MAX_SPECULAR: u32 = {MAX_SPECULAR}u;\nconst MAX_LEVELS: u32 = {MAX_LEVELS}u;\n{TYPES_WGSL}"
+        "const MAX_SPECULAR: u32 = {MAX_SPECULAR}u;\nconst MAX_LEVELS: u32 = {MAX_LEVELS}u;\nconst MAX_BOUNCES: u32 = {MAX_BOUNCES}u;\n{TYPES_WGSL}"
     )
 }
 
@@ -542,7 +550,8 @@ impl CausticsMethod for BeamMethod {
 
     fn counters(&self, ctx: &GpuContext) -> Result<Counters, MethodError> {
         let c = self.read_control(ctx)?;
-        let mut out = control::counters(&c, self.config.refinement.levels);
+        let mut out =
+            control::counters(&c, self.config.refinement.levels, self.config.beams.bounces);
         // Derived: 8 hull triangles per beam, 2 base triangles per grid cell.
         out.insert(
             "hull_triangles".into(),

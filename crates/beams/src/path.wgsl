@@ -12,9 +12,18 @@
 @group(1) @binding(4) var impostor_map: texture_2d_array<f32>;
 @group(1) @binding(5) var impostor_ids: texture_2d_array<u32>;
 
+// Objects a path meets (each generator once; `bounces` adds the meetings again).
 const MAX_SPECULAR_EVENTS: u32 = 4u;
+// Light-path families of a leaf (one beam each): the main path, the Fresnel
+// reflection at the first interface, then FAMILY_INTERNAL + j - 1 for the light that
+// reflects j times inside the first object, a closed refractor, before it leaves
+// (j = 1..=bounces).
 const FAMILY_MAIN: u32 = 0u;
 const FAMILY_REFLECTED: u32 = 1u;
+const FAMILY_INTERNAL: u32 = 2u;
+// Signature events: first hit, exit of a closed refractor, next object, internal or
+// total internal reflection.
+const EVENT_INTERNAL: u32 = 3u;
 
 struct Ray {
     origin: vec3<f32>,
@@ -103,9 +112,9 @@ fn specular_slot_of(object: u32) -> u32 {
 }
 
 // One call site per query: WGSL inlines every call, and the search loop is large.
-fn trace_slot(k: u32, o: vec3<f32>, d: vec3<f32>, t_max: f32) -> ImpostorHit {
+fn trace_slot(k: u32, o: vec3<f32>, d: vec3<f32>, t_min: f32, t_max: f32) -> ImpostorHit {
     let s = u.specular[k];
-    return impostor_trace_at(impostor_map, i32(6u * k), s.center_reach.xyz, o, d, 1e-4, t_max,
+    return impostor_trace_at(impostor_map, i32(6u * k), s.center_reach.xyz, o, d, t_min, t_max,
                              u.impostor_tolerance * s.center_reach.w);
 }
 
@@ -140,19 +149,34 @@ struct PathEnd {
     // Distance along `dir` to the receiver it lands on (m), and that receiver.
     t_end: f32,
     end_object: u32,
+    // Slot of the first object (NONE where the light G-buffer shows no generator).
+    first_slot: u32,
+    // Further specular events taken (`bounces`): generators met again, and total
+    // internal reflections (inside the first object or elsewhere).
+    rehits: u32,
+    tir: u32,
 }
 
 fn mix_signature(s: u32, object: u32, event: u32) -> u32 {
     return (s ^ (object * 4u + event + 1u)) * 0x9E3779B1u;
 }
 
-// Traces the light path of light-view uv. FAMILY_MAIN refracts at dielectrics
-// (through closed ones: exit via the impostor; total internal reflection ends the
-// path, as in the paper's Fig. 4) and reflects at mirrors; FAMILY_REFLECTED takes
-// the Fresnel reflection at the first (dielectric) surface.
+// Traces the light path of light-view uv in `family`. FAMILY_MAIN refracts at
+// dielectrics (through closed ones: exit via the impostor) and reflects at mirrors;
+// FAMILY_REFLECTED takes the Fresnel reflection at the first (dielectric) surface;
+// FAMILY_INTERNAL + j - 1 reflects j times inside the first object (a closed
+// refractor: each time with the Fresnel reflectance, or all of it under total internal
+// reflection) and leaves at the next exit. The paper's path (`bounces` = 0, Fig. 4 and
+// Sect. 6) ends at a total internal reflection and passes through a generator it meets
+// again; with `bounces` > 0 the events beyond it share that budget: the family's
+// internal reflections, then total internal reflections elsewhere (followed: no light
+// is lost, no family needed) and generators met again (a ring's opposite wall, a
+// concave mesh). Fresnel reflections inside a refractor other than the first object
+// are not followed (they would need families of their own).
 fn trace_path(uv: vec2<f32>, family: u32) -> PathEnd {
     var e: PathEnd;
     e.valid = false;
+    e.first_slot = NONE;
     let ray = light_ray(uv);
     let g = light_gbuffer_at(uv, ray);
     if !g.hit {
@@ -162,11 +186,23 @@ fn trace_path(uv: vec2<f32>, family: u32) -> PathEnd {
     if slot == NONE {
         return e;
     }
+    e.first_slot = slot;
     e.first_object = g.object;
     e.first_normal = g.normal;
     e.first_depth = dot(g.position - ray.origin, ray.dir);
     e.first_point = g.position;
     e.light_dir = ray.dir;
+    // Internal reflections the family takes in the first object, and the rest of the
+    // `bounces` budget for the other further events.
+    var internal = 0u;
+    if family >= FAMILY_INTERNAL {
+        let first = u.specular[slot];
+        internal = family - FAMILY_INTERNAL + 1u;
+        if first.kind != MAT_DIELECTRIC || first.closed != 1u || internal > u.bounces {
+            return e;
+        }
+    }
+    var budget = u.bounces - internal;
     var w: vec3<f32>;
     if u.light_dir_kind.w < 0.5 {
         w = u.light_power.xyz * extinction(dot(g.position, ray.dir) - u.light_pos_start.w);
@@ -178,8 +214,11 @@ fn trace_path(uv: vec2<f32>, family: u32) -> PathEnd {
     var d = ray.dir;
     var n = g.normal;
     var sig = mix_signature(0u, g.object, 0u);
-    for (var event = 0u; event < MAX_SPECULAR_EVENTS; event++) {
+    for (var event = 0u; event < MAX_SPECULAR_EVENTS + u.bounces; event++) {
         let s = u.specular[slot];
+        // Normal of the surface the path leaves at this event (the exit's, through a
+        // closed refractor), to tell meeting it again from grazing it.
+        var n_leave = n;
         let nf = select(n, -n, dot(d, n) > 0.0);
         let cos_i = -dot(d, nf);
         if s.kind == MAT_MIRROR {
@@ -195,28 +234,69 @@ fn trace_path(uv: vec2<f32>, family: u32) -> PathEnd {
             } else {
                 let t = refract(d, nf, eta);
                 if dot(t, t) < 0.5 {
-                    return e;
+                    // Total internal reflection at a surface met from inside (an open
+                    // refractor from below): the paper's path ends here.
+                    if budget == 0u {
+                        return e;
+                    }
+                    budget -= 1u;
+                    e.tir += 1u;
+                    d = reflect(d, nf);
+                    sig = mix_signature(sig, s.object, EVENT_INTERNAL);
+                } else {
+                    w *= 1.0 - fresnel;
+                    d = normalize(t);
                 }
-                w *= 1.0 - fresnel;
-                d = normalize(t);
-                if s.closed == 1u && entering {
-                    // Two-sided refraction (Sect. 6): the exit point from the impostor.
-                    let h = trace_slot(slot, p, d, 2.0 * s.center_reach.w);
-                    if !h.found {
+                if dot(t, t) >= 0.5 && s.closed == 1u && entering {
+                    // Two-sided refraction (Sect. 6): the exit point from the impostor,
+                    // after the internal reflections the path takes. Each pass of the
+                    // loop reflects (spending `wanted` or `budget`) or leaves.
+                    var wanted = select(0u, internal, event == 0u);
+                    // In the first object the count of internal reflections is the
+                    // family's: a total internal reflection beyond it is another
+                    // family's light, not this one's.
+                    let counted = event == 0u && family != FAMILY_REFLECTED;
+                    var left = false;
+                    for (var k = 0u; k <= u.bounces; k++) {
+                        let h = trace_slot(slot, p, d, 1e-4, 2.0 * s.center_reach.w);
+                        if !h.found {
+                            return e;
+                        }
+                        w *= extinction(h.t);
+                        p = h.position;
+                        let n_out = h.normal;
+                        let cos_o = dot(d, n_out);
+                        let f_out = fresnel_dielectric(abs(cos_o), s.ior);
+                        let t2 = refract(d, select(n_out, -n_out, cos_o > 0.0), s.ior);
+                        let tir = dot(t2, t2) < 0.5;
+                        var reflects = wanted > 0u;
+                        if tir && !reflects {
+                            if counted || budget == 0u {
+                                return e;
+                            }
+                            budget -= 1u;
+                            reflects = true;
+                        } else if reflects {
+                            wanted -= 1u;
+                        }
+                        if reflects {
+                            // f_out is 1 under total internal reflection.
+                            w *= f_out;
+                            e.tir += u32(tir);
+                            d = reflect(d, n_out);
+                            sig = mix_signature(sig, s.object, EVENT_INTERNAL);
+                            continue;
+                        }
+                        w *= 1.0 - f_out;
+                        d = normalize(t2);
+                        n_leave = n_out;
+                        sig = mix_signature(sig, s.object, 1u);
+                        left = true;
+                        break;
+                    }
+                    if !left {
                         return e;
                     }
-                    w *= extinction(h.t);
-                    p = h.position;
-                    let n_out = h.normal;
-                    let cos_o = dot(d, n_out);
-                    let f_out = fresnel_dielectric(abs(cos_o), s.ior);
-                    let t2 = refract(d, select(n_out, -n_out, cos_o > 0.0), s.ior);
-                    if dot(t2, t2) < 0.5 {
-                        return e;
-                    }
-                    w *= 1.0 - f_out;
-                    d = normalize(t2);
-                    sig = mix_signature(sig, s.object, 1u);
                 }
             }
         }
@@ -231,13 +311,33 @@ fn trace_path(uv: vec2<f32>, family: u32) -> PathEnd {
         var best: ImpostorHit;
         best.t = t_receiver;
         for (var k = 0u; k < u.specular_count; k++) {
-            // A surface is not met again right after leaving it (convex or open
-            // generators; the stated limit of impostor tracing).
+            // The paper's path does not meet the surface it just left again (convex or
+            // open generators; the stated limit of impostor tracing). With `bounces`
+            // left it may (the ring's opposite wall): that search starts 5 % of the
+            // reach away, so the point just left is not found again (as photon-hits),
+            // and not at all where the receiver is nearer (a search with t_max below
+            // t_min runs backwards, into the object just left).
+            var t_min = 1e-4;
             if k == slot {
-                continue;
+                t_min = 0.05 * u.specular[k].center_reach.w;
+                if budget == 0u || t_min >= t_receiver {
+                    continue;
+                }
             }
-            let h = trace_slot(k, p, d, t_receiver);
-            if h.found && h.t < best.t {
+            let h = trace_slot(k, p, d, t_min, t_receiver);
+            // The same surface met again is approached from the side the path left it
+            // on. A closed one (normals stored outward) is met from outside: the path
+            // left it outwards and meets it inwards; one left inwards is an exit the
+            // impostor search misplaced onto the entry (where the paper's path passes
+            // through, and so does this one).
+            var again = k != slot;
+            if k == slot {
+                let leave = dot(d, n_leave);
+                let meet = dot(d, h.normal);
+                let outside = (leave > 0.0) && (meet < 0.0);
+                again = select((leave * meet) < 0.0, outside, u.specular[k].closed == 1u);
+            }
+            if h.found && h.t < best.t && again {
                 best = h;
                 next = k;
             }
@@ -251,6 +351,10 @@ fn trace_path(uv: vec2<f32>, family: u32) -> PathEnd {
             e.t_end = t_receiver;
             e.end_object = select(NONE, impostor_object_at(impostor_ids, receiver_layer(), r.position - u.receivers.xyz), r.found);
             return e;
+        }
+        if next == slot {
+            budget -= 1u;
+            e.rehits += 1u;
         }
         w *= extinction(best.t);
         p = best.position;

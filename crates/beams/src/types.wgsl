@@ -2,7 +2,7 @@
 // Mirrored by the #[repr(C)] structs of gpu_types.rs, whose tests check every field
 // against naga's layout of these.
 
-// MAX_SPECULAR and MAX_LEVELS are prepended from the Rust constants (lib.rs).
+// MAX_SPECULAR, MAX_LEVELS and MAX_BOUNCES are prepended from the Rust constants (lib.rs).
 
 // One caustic generator object: its impostor slot holds its distance map.
 struct SpecularSlot {
@@ -62,7 +62,8 @@ struct BeamUniforms {
     scene_reach: f32,
     // Photon-hit difference (camera pixels) at edge midpoints that splits.
     split_hit_px: f32,
-    pad0: u32,
+    // Further specular events beyond the paper's path (`bounces`, path.wgsl).
+    bounces: u32,
     pad1: u32,
     pad2: u32,
 }
@@ -82,7 +83,9 @@ struct Beam {
     v: array<vec4<f32>, 3>,
     // xyz: d_i / dot(d_i, n); w: height at which edge i meets a receiver (m).
     d: array<vec4<f32>, 3>,
-    // rgb: flux Φ_i (W) of the beam if every ray carried vertex i's weight; w unused.
+    // rgb: flux Φ_i (W) of the beam if every ray carried vertex i's weight; w of
+    // flux[0]: the light-path family (path.wgsl FAMILY_*), of flux[1]: generators met
+    // again, of flux[2]: total internal reflections (both summed over the corners).
     flux: array<vec4<f32>, 3>,
     // xyz: unit base normal n (the beam's y axis); w: extrusion height y_max (m).
     n: vec4<f32>,

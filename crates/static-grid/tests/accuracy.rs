@@ -69,3 +69,49 @@ fn static_grid_on_sphere_on_plane_is_close_to_the_reference() {
         0
     );
 }
+
+/// The glass sphere against the CPU reference (`caustics_testing::refracting_sphere`,
+/// 96×72, 16 samples per pixel) with the paper's light paths and with `bounces` = 2:
+/// the light reflected twice inside the ball comes in as beams of its own (the light
+/// reflected once goes back up). The gain is small and the test says so: the beam
+/// methods already follow the first interface's reflection (`reflections`, the bulk
+/// of the reference's halo), and what the static grid still misses is the beams it
+/// drops at the silhouette (dropped_discontinuity), which no light path brings back.
+/// Lavapipe: paper flux 0.9177, HDR-FLIP after flux 0.1467; bounces 2: flux 0.9180,
+/// relMSE after flux 3.2e-3 (one pixel off: 8.8e-3), HDR-FLIP after flux 0.1456. Both
+/// must improve (deterministic on one adapter); the bounds sit a margin above the
+/// extended figures.
+#[test]
+fn extended_light_paths_bring_the_glass_sphere_closer_to_the_reference() {
+    let info = caustics_method::registry_entry::<static_grid::StaticGrid>();
+    let paper = caustics_testing::refracting_sphere_with(&info, serde_json::json!({}));
+    let extended =
+        caustics_testing::refracting_sphere_with(&info, serde_json::json!({"bounces": 2}));
+    let flux = |c: &caustics_testing::Comparison| c.errors.flux_ratio.unwrap_or(f64::NAN);
+    let flip = |c: &caustics_testing::Comparison| c.errors.hdr_flip_after_flux.unwrap_or(f64::NAN);
+    eprintln!(
+        "paper: flux {:.4}, HDR-FLIP after flux {:.4}; bounces 2: flux {:.4}, HDR-FLIP after flux {:.4}; internal-reflection beams {}",
+        flux(&paper),
+        flip(&paper),
+        flux(&extended),
+        flip(&extended),
+        extended.measured.counter("beams_path_internal_2")
+    );
+    assert!(extended.measured.counter("beams_path_internal_2") > 0);
+    assert!(
+        flux(&extended) > flux(&paper) && flip(&extended) < flip(&paper),
+        "bounces did not help: flux {} -> {}, HDR-FLIP {} -> {}",
+        flux(&paper),
+        flux(&extended),
+        flip(&paper),
+        flip(&extended)
+    );
+    extended.check(
+        &artifacts!(),
+        &Bounds {
+            flux: 0.90..1.02,
+            rel_mse_after_flux: 5e-3,
+            hdr_flip_after_flux: 0.16,
+        },
+    );
+}
