@@ -173,6 +173,14 @@ const ORPHAN_COUNTER: (&str, &str) = ("ORPHAN_HITS", "photon_hits_without_triang
 
 /// `caustic-triangles` bound to one scene.
 pub struct CausticTriangles {
+    /// One per (light, caustic generator) pair, light-major ([`PhotonHits::for_scene`]).
+    pairs: Vec<Reconstruction>,
+    bytes: u64,
+}
+
+/// The photon hit image of one (light, generator) pair, its cube map and the passes
+/// that reconstruct it.
+pub struct Reconstruction {
     hits: PhotonHits,
     map: CausticMap,
     areas: ComputePass,
@@ -243,14 +251,51 @@ impl TriangleBuffers {
 }
 
 impl CausticTriangles {
-    /// Builds the photon hit image, the caustic cube map and the reconstruction passes.
+    /// Builds the photon hit images (one per light and caustic generator), their caustic
+    /// cube maps and the reconstruction passes.
     pub fn new(
         ctx: &GpuContext,
         renderer: &Renderer,
         params: &CausticTrianglesParams,
     ) -> Result<Self, MethodError> {
-        // §3, §4.1: the photon hit image; §4.2: the cube map it is reconstructed into.
-        let hits = PhotonHits::new(ctx, renderer, NAME, &params.hits)?;
+        // §3, §4.1: the photon hit images; §4.2: the cube maps they are reconstructed into.
+        let pairs = PhotonHits::for_scene(ctx, renderer, NAME, &params.hits)?
+            .into_iter()
+            .map(|hits| Reconstruction::new(ctx, renderer, params, hits))
+            .collect::<Result<Vec<_>, _>>()?;
+        let bytes = pairs.iter().map(|p| p.bytes).sum();
+        Ok(Self { pairs, bytes })
+    }
+
+    /// The (light, generator) pairs' reconstructions.
+    pub fn pairs(&self) -> &[Reconstruction] {
+        &self.pairs
+    }
+
+    /// The first pair's photon hit image (the one of a scene with one light and one
+    /// generator).
+    pub fn photon_hits(&self) -> &PhotonHits {
+        &self.pairs[0].hits
+    }
+
+    /// The first pair's caustic cube map.
+    pub fn caustic_map(&self) -> &CausticMap {
+        &self.pairs[0].map
+    }
+
+    /// The first pair's per-vertex irradiance ([`Reconstruction::read_vertex_irradiance`]).
+    pub fn read_vertex_irradiance(&self, ctx: &GpuContext) -> Result<Vec<[f32; 4]>, MethodError> {
+        self.pairs[0].read_vertex_irradiance(ctx)
+    }
+}
+
+impl Reconstruction {
+    fn new(
+        ctx: &GpuContext,
+        renderer: &Renderer,
+        params: &CausticTrianglesParams,
+        hits: PhotonHits,
+    ) -> Result<Self, MethodError> {
         let map = CausticMap::new(ctx, renderer, NAME, hits.center, hits.reach, &params.hits)?;
         let n = hits.resolution;
         let triangle_count = hits.layers * (n - 1) * (n - 1) * 2;
@@ -338,18 +383,18 @@ impl CausticTriangles {
         })
     }
 
-    /// The photon hit image.
+    /// The pair's photon hit image.
     pub fn photon_hits(&self) -> &PhotonHits {
         &self.hits
     }
 
-    /// The caustic cube map.
+    /// The pair's caustic cube map.
     pub fn caustic_map(&self) -> &CausticMap {
         &self.map
     }
 
-    /// Per-vertex irradiance (W/m², rgb + unused w), one per photon-image texel,
-    /// read back for tests and figures.
+    /// Per-vertex irradiance (W/m², rgb; w = 1 for an orphan), one per photon-image
+    /// texel, read back for tests and figures.
     pub fn read_vertex_irradiance(&self, ctx: &GpuContext) -> Result<Vec<[f32; 4]>, MethodError> {
         let bytes = caustics_gpu::readback::read_buffer_bytes(
             ctx,
@@ -363,6 +408,27 @@ impl CausticTriangles {
 
 impl CausticsMethod for CausticTriangles {
     fn record(&mut self, frame: &mut Frame<'_>) -> Result<(), MethodError> {
+        for pair in &self.pairs {
+            pair.record(frame)?;
+        }
+        Ok(())
+    }
+
+    fn counters(&self, ctx: &GpuContext) -> Result<Counters, MethodError> {
+        let mut total = Counters::new();
+        for pair in &self.pairs {
+            photon_hits::add_counters(&mut total, pair.counters(ctx)?);
+        }
+        Ok(total)
+    }
+
+    fn gpu_memory_bytes(&self) -> u64 {
+        self.bytes
+    }
+}
+
+impl Reconstruction {
+    fn record(&self, frame: &mut Frame<'_>) -> Result<(), MethodError> {
         self.hits.record(frame)?;
         frame
             .encoder
@@ -409,10 +475,6 @@ impl CausticsMethod for CausticTriangles {
         }
         out.insert(ORPHAN_COUNTER.1.into(), c[TRI_REASONS.len()] as u64);
         Ok(out)
-    }
-
-    fn gpu_memory_bytes(&self) -> u64 {
-        self.bytes
     }
 }
 

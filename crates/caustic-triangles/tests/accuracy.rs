@@ -230,6 +230,13 @@ fn refracting_sphere_with_the_extended_light_paths_has_all_the_light() {
 }
 
 #[test]
+fn every_light_and_generator_pair_adds_its_caustic() {
+    caustics_testing::photon_hits::pairs_add_up(&caustics_method::registry_entry::<
+        caustic_triangles::CausticTriangles,
+    >());
+}
+
+#[test]
 fn distance_test_removes_the_light_leak_onto_an_occluded_receiver() {
     caustics_testing::photon_hits::distance_test_removes_the_light_leak(
         &caustics_method::registry_entry::<caustic_triangles::CausticTriangles>(),
@@ -261,13 +268,26 @@ fn bad_parameters_and_unsupported_scenes_are_clear() {
             (serde_json::json!({"max_stretch": 0}), "max_stretch"),
         ],
     );
-    // Two specular objects: one photon hit image follows one generator.
+    // A dielectric cylinder: neither closed (sphere, mesh) nor an open surface.
+    let cylinder = scene(&serde_json::json!({
+        "name": "glass_cylinder",
+        "camera": {"eye": [0, 3, 3], "target": [0, 0, 0], "up": [0, 1, 0], "fov_y_deg": 50, "width": 32, "height": 24},
+        "lights": [{"type": "directional", "direction": [0, -1, 0], "irradiance": [1, 1, 1]}],
+        "materials": {
+            "glass": {"type": "dielectric", "ior": 1.5},
+            "floor": {"type": "diffuse", "albedo": [0.8, 0.8, 0.8]}
+        },
+        "objects": [
+            {"shape": {"type": "cylinder", "center": [0, 0.5, 0], "axis": [0, 1, 0], "radius": 0.5, "height": 1}, "material": "glass"},
+            {"shape": {"type": "quad", "center": [0, 0, 0], "normal": [0, 1, 0], "size": [6, 6]}, "material": "floor"}
+        ]
+    }));
     let reason = info
         .supports(
-            &builtin("sphere_over_water", 32, 24),
+            &cylinder,
             &(info.parse)(&caustics_testing::photon_hits::small(serde_json::json!({})))
                 .expect("valid parameters"),
         )
-        .expect_err("sphere_over_water must be declined");
-    assert!(reason.0.contains("both specular"), "{}", reason.0);
+        .expect_err("a glass cylinder must be declined");
+    assert!(reason.0.contains("dielectric cylinder"), "{}", reason.0);
 }

@@ -27,9 +27,13 @@
 //!   reconstructed on one surface from leaking onto a surface hidden behind it.
 //!   `distance_test = false` turns the test off, to show the leak.
 //!
-//! Scope: one light, one specular object (a mirror of any shape, a closed dielectric
-//! (sphere or mesh) with two refractions, or an open dielectric quad/heightfield with
-//! one), diffuse receivers of any shape.
+//! Scope: any lights, any specular objects (each a mirror of any shape, a closed
+//! dielectric (sphere or mesh) with two refractions, or an open dielectric
+//! quad/heightfield with one), diffuse receivers of any shape. As in the paper (§4.1),
+//! each caustic generator is rendered from each light: one hit image, distance maps
+//! and caustic cube map per (light, generator) pair ([`PhotonHits::for_scene`]), whose
+//! camera passes add up. Light passing from one generator to another (a chain, the
+//! ball over the water) is dropped where it meets the second, not traced on.
 //!
 //! **Light paths.** The paper's path (the default) has one specular event per
 //! interface: light reflected inside a refractor (total internal or Fresnel) is
@@ -139,15 +143,10 @@ pub enum GeneratorKind {
     OpenRefractor,
 }
 
-/// The scene's one caustic generator and its kind, or why the scene is out of reach.
-pub fn caustic_generator(scene: &Scene) -> Result<(usize, GeneratorKind), Unsupported> {
-    if scene.lights.len() != 1 {
-        return Err(Unsupported(format!(
-            "needs exactly one light (one photon hit image), the scene has {}",
-            scene.lights.len()
-        )));
-    }
-    let mut generator = None;
+/// The scene's caustic generators (every specular object) and their kinds, or why the
+/// scene is out of reach.
+pub fn caustic_generators(scene: &Scene) -> Result<Vec<(usize, GeneratorKind)>, Unsupported> {
+    let mut generators = Vec::new();
     let mut receivers = 0;
     for (i, o) in scene.objects.iter().enumerate() {
         let kind = match (scene.material(o), &o.shape) {
@@ -169,21 +168,19 @@ pub fn caustic_generator(scene: &Scene) -> Result<(usize, GeneratorKind), Unsupp
                 )));
             }
         };
-        if let Some((first, _)) = generator {
-            return Err(Unsupported(format!(
-                "objects[{first}] and objects[{i}] are both specular; the photon hit image follows one caustic generator"
-            )));
-        }
-        generator = Some((i, kind));
+        generators.push((i, kind));
     }
     if receivers == 0 {
         return Err(Unsupported("the scene has no diffuse receiver".into()));
     }
-    generator.ok_or_else(|| Unsupported("the scene has no specular object".into()))
+    if generators.is_empty() {
+        return Err(Unsupported("the scene has no specular object".into()));
+    }
+    Ok(generators)
 }
 
-/// What both photon-hit methods render: one reflecting or refracting generator seen
-/// by one light of any kind, surface caustics only (Umenhoffer et al. §3).
+/// What both photon-hit methods render: every reflecting or refracting generator seen
+/// by every light of any kind, surface caustics only (Umenhoffer et al. §3, §4.1).
 pub const CAPABILITIES: Capabilities = Capabilities {
     surface: true,
     volume: false,
@@ -198,7 +195,7 @@ pub const CAPABILITIES: Capabilities = Capabilities {
 
 /// Scene checks shared by both methods.
 pub fn check_scene(scene: &Scene) -> Result<(), Unsupported> {
-    caustic_generator(scene).map(|_| ())
+    caustic_generators(scene).map(|_| ())
 }
 
 /// Matches `TraceUniform` in trace.wgsl.
@@ -239,20 +236,24 @@ struct Generator {
     center: Vec3,
     /// Farthest vertex from `center` (m).
     radius: f32,
-    /// The diffuse objects.
+    /// Every other object (the receivers' distance map).
     receivers: Vec<usize>,
 }
 
 impl Generator {
-    /// The scene's generator, or why `method` cannot render the scene.
-    fn locate(gpu_scene: &GpuScene, method: &'static str) -> Result<Self, MethodError> {
+    /// Object `index` of kind `kind` as a generator, or why `method` cannot use it.
+    fn locate(
+        gpu_scene: &GpuScene,
+        method: &'static str,
+        index: usize,
+        kind: GeneratorKind,
+    ) -> Result<Self, MethodError> {
         let scene = &gpu_scene.scene;
         let unsupported = |reason| MethodError::Unsupported {
             method,
             scene: scene.name.clone(),
             reason,
         };
-        let (index, kind) = caustic_generator(scene).map_err(unsupported)?;
         let center = objects_bounds(gpu_scene, &[index])
             .map(|b| b.center())
             .ok_or_else(|| {
@@ -263,13 +264,11 @@ impl Generator {
             .iter()
             .map(|p| (*p - center).length())
             .fold(0.0f32, f32::max);
-        let receivers = scene
-            .objects
-            .iter()
-            .enumerate()
-            .filter(|(_, o)| !scene.material(o).is_specular())
-            .map(|(i, _)| i)
-            .collect();
+        // Every other object: the diffuse ones receive the light, another generator
+        // stops it (the paper traces on through the other's distance map; here light
+        // passing from one generator to another is dropped as photons_specular_receiver
+        // rather than let through to the receivers behind it).
+        let receivers = (0..scene.objects.len()).filter(|&i| i != index).collect();
         Ok(Self {
             index,
             kind,
@@ -285,6 +284,7 @@ impl Generator {
         view: &LightView,
         tan_half: f32,
         config: &PhotonHitConfig,
+        light: usize,
         faces: u32,
         maps: &DistanceMaps,
     ) -> TraceUniform {
@@ -300,7 +300,12 @@ impl Generator {
             center: self.center.extend(maps.receivers.reach).to_array(),
             generator_center: self.center.extend(generator_reach).to_array(),
             view: [view.texel_size, tan_half, 0.0, SEARCH_TOLERANCE],
-            paths: [config.bounces, sheets, reflected.unwrap_or(u32::MAX), 0],
+            paths: [
+                config.bounces,
+                sheets,
+                reflected.unwrap_or(u32::MAX),
+                light as u32,
+            ],
         }
     }
 }
@@ -378,26 +383,58 @@ pub struct PhotonHits {
     pub reach: f32,
     /// The generator (object index).
     pub generator: usize,
+    /// The light (index into the scene's lights).
+    pub light: usize,
     /// The texel size of the light view (m, or tan units for perspective faces).
     pub texel_size: f32,
     bytes: u64,
 }
 
 impl PhotonHits {
-    /// Builds the light G-buffer, the two distance maps and the tracing pass for the
-    /// renderer's scene; pass names start with `method` ("<method>/trace_photons").
-    pub fn new(
+    /// The hit images of the renderer's scene: one per light and caustic generator
+    /// (§4.1: "each caustics generator is rendered from the point of view of each light
+    /// source"), light-major. Pass names start with `method` ("<method>/trace_photons",
+    /// the same for every pair, so a pass's time is that of all of them).
+    pub fn for_scene(
         ctx: &GpuContext,
         renderer: &Renderer,
         method: &'static str,
         config: &PhotonHitConfig,
+    ) -> Result<Vec<Self>, MethodError> {
+        let scene = &renderer.scene().scene;
+        let generators = caustic_generators(scene).map_err(|reason| MethodError::Unsupported {
+            method,
+            scene: scene.name.clone(),
+            reason,
+        })?;
+        let mut out = Vec::new();
+        for light in 0..scene.lights.len() {
+            for &(index, kind) in &generators {
+                out.push(Self::new(
+                    ctx, renderer, method, config, light, index, kind,
+                )?);
+            }
+        }
+        Ok(out)
+    }
+
+    /// Builds the light G-buffer, the two distance maps and the tracing pass of light
+    /// `light` and generator `index` (of kind `kind`).
+    fn new(
+        ctx: &GpuContext,
+        renderer: &Renderer,
+        method: &'static str,
+        config: &PhotonHitConfig,
+        light: usize,
+        index: usize,
+        kind: GeneratorKind,
     ) -> Result<Self, MethodError> {
         let gpu_scene = renderer.scene();
         let scene = &gpu_scene.scene;
-        let g = Generator::locate(gpu_scene, method)?;
+        let g = Generator::locate(gpu_scene, method, index, kind)?;
         // The paper renders the generator from the light: every texel looks at it.
         let view = LightView::fit_sphere(
-            &scene.lights[0],
+            &scene.lights[light],
             g.center,
             g.radius,
             &scene.bounds(),
@@ -412,7 +449,7 @@ impl PhotonHits {
                 // §3: where a refracted ray leaves the generator and lands on a receiver.
                 let maps = DistanceMaps::new(ctx, gpu_scene, &g, config.distance_map_size)?;
                 let faces = light_gbuffer.layers();
-                let uniform = g.trace_uniform(&view, tan_half, config, faces, &maps);
+                let uniform = g.trace_uniform(&view, tan_half, config, light, faces, &maps);
                 let texels = (faces * uniform.paths[1]) as u64
                     * config.resolution as u64
                     * config.resolution as u64;
@@ -427,7 +464,7 @@ impl PhotonHits {
         // §4.1: each texel's light reflected or refracted through the generator onto
         // the receiver it lands on.
         let shader = Shader::new(ctx, "photon-hits trace.wgsl", compose(TRACE_WGSL))?;
-        let light = [
+        let light_views = [
             &light_gbuffer.position,
             &light_gbuffer.normal,
             &light_gbuffer.ids,
@@ -441,9 +478,9 @@ impl PhotonHits {
                 1,
                 &[
                     ("tu", &uniform),
-                    ("light_position", &light[0]),
-                    ("light_normal", &light[1]),
-                    ("light_ids", &light[2]),
+                    ("light_position", &light_views[0]),
+                    ("light_normal", &light_views[1]),
+                    ("light_ids", &light_views[2]),
                     ("generator_map", &generator_map.normal_distance.view),
                     ("generator_ids", &generator_map.object_ids.view),
                     ("receiver_map", &maps.receivers.normal_distance.view),
@@ -493,6 +530,7 @@ impl PhotonHits {
             resolution: config.resolution,
             center: g.center,
             generator: g.index,
+            light,
             texel_size: view.texel_size,
             bytes,
         })
@@ -523,6 +561,15 @@ impl PhotonHits {
         let mut pass = self.trace.begin(frame)?;
         pass.dispatch("trace_photons", [self.light_texels().div_ceil(64), 1, 1])?;
         Ok(())
+    }
+
+    /// Counters of the last frame of every hit image of `all`, summed by name.
+    pub fn counters_of(all: &[Self], ctx: &GpuContext) -> Result<Counters, MethodError> {
+        let mut total = Counters::new();
+        for hits in all {
+            add_counters(&mut total, hits.counters(ctx)?);
+        }
+        Ok(total)
     }
 
     /// Counters of the last frame: texels, valid hits and why the others are invalid.
@@ -558,6 +605,13 @@ impl PhotonHits {
     /// Bytes of GPU memory owned.
     pub fn bytes(&self) -> u64 {
         self.bytes
+    }
+}
+
+/// Adds `more` into `total`, counter by counter (the (light, generator) pairs' counts).
+pub fn add_counters(total: &mut Counters, more: Counters) {
+    for (name, v) in more {
+        *total.entry(name).or_insert(0) += v;
     }
 }
 

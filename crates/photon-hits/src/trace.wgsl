@@ -37,7 +37,7 @@ struct TraceUniform {
     // w: search tolerance relative to a map's reach.
     view: vec4<f32>,
     // x: further specular events followed on the generator (`bounces`); y: sheets of
-    // the hit image; z: the Fresnel-reflection sheet, or NONE; w unused.
+    // the hit image; z: the Fresnel-reflection sheet, or NONE; w: the light (index into `lights`).
     paths: vec4<u32>,
 }
 
@@ -172,7 +172,7 @@ fn trace_photons(@builtin(global_invocation_id) gid: vec3<u32>) {
         }
         return;
     }
-    let light = lights[0];
+    let light = lights[tu.paths.w];
     let p0 = pos.xyz;
     // Direction of the texel's light and the power through the texel (§4.1: "the power
     // going through a pixel of the light's camera"): irradiance × texel area for a

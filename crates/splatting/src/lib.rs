@@ -134,83 +134,103 @@ struct SplatUniform {
 
 /// `splatting` bound to one scene.
 pub struct Splatting {
-    hits: PhotonHits,
-    map: CausticMap,
-    splat_pass: RasterPass,
+    /// One photon hit image and cube map per (light, caustic generator) pair,
+    /// light-major ([`PhotonHits::for_scene`]).
+    pairs: Vec<(PhotonHits, CausticMap)>,
+    /// The splat pass of each pair (its bind group holds the pair's buffers).
+    splat_passes: Vec<RasterPass>,
     kernel_px: u32,
     bytes: u64,
 }
 
 impl Splatting {
-    /// Builds the photon hit image, the caustic cube map and the splat pass.
+    /// Builds the photon hit images (one per light and caustic generator), their
+    /// caustic cube maps and splat passes.
     pub fn new(
         ctx: &GpuContext,
         renderer: &Renderer,
         params: &SplattingParams,
     ) -> Result<Self, MethodError> {
-        let hits = PhotonHits::new(ctx, renderer, NAME, &params.hits)?;
-        let map = CausticMap::new(ctx, renderer, NAME, hits.center, hits.reach, &params.hits)?;
+        let kernel_px = kernel_px(params);
         let splat_uniform = ctx
             .device
             .create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("splat params"),
                 contents: bytemuck::bytes_of(&SplatUniform {
-                    kernel_px: kernel_px(params),
+                    kernel_px,
                     _pad: [0; 3],
                 }),
                 usage: wgpu::BufferUsages::UNIFORM,
             });
         let shader = Shader::new(ctx, "splatting splat.wgsl", splat_source())?;
-        // All six faces in one pass: each hit is drawn once per face, clipped to it.
-        let splat_pass = RasterPass::builder(ctx, "splatting/splat", &shader, "vs_splat")
-            .frame(renderer)
-            .bind(
-                1,
-                &[
-                    ("cm", map.uniform()),
-                    ("su", &splat_uniform),
-                    ("hits", &hits.hits),
-                ],
-            )
-            .fragment("fs_splat", &[Some(additive_hdr_target())])
-            .build()?;
-        let bytes = splat_uniform.size() + hits.bytes() + map.bytes();
+        let mut pairs = Vec::new();
+        let mut splat_passes = Vec::new();
+        let mut bytes = splat_uniform.size();
+        for hits in PhotonHits::for_scene(ctx, renderer, NAME, &params.hits)? {
+            let map = CausticMap::new(ctx, renderer, NAME, hits.center, hits.reach, &params.hits)?;
+            // All six faces in one pass: each hit is drawn once per face, clipped to it.
+            let splat_pass = RasterPass::builder(ctx, "splatting/splat", &shader, "vs_splat")
+                .frame(renderer)
+                .bind(
+                    1,
+                    &[
+                        ("cm", map.uniform()),
+                        ("su", &splat_uniform),
+                        ("hits", &hits.hits),
+                    ],
+                )
+                .fragment("fs_splat", &[Some(additive_hdr_target())])
+                .build()?;
+            bytes += hits.bytes() + map.bytes();
+            pairs.push((hits, map));
+            splat_passes.push(splat_pass);
+        }
         Ok(Self {
-            hits,
-            map,
-            splat_pass,
-            kernel_px: kernel_px(params),
+            pairs,
+            splat_passes,
+            kernel_px,
             bytes,
         })
     }
 
-    /// The photon hit image.
+    /// The first (light, generator) pair's photon hit image.
     pub fn photon_hits(&self) -> &PhotonHits {
-        &self.hits
+        &self.pairs[0].0
     }
 
-    /// The caustic cube map.
+    /// The first pair's caustic cube map.
     pub fn caustic_map(&self) -> &CausticMap {
-        &self.map
+        &self.pairs[0].1
+    }
+
+    /// Every (light, generator) pair's hit image and cube map.
+    pub fn pairs(&self) -> &[(PhotonHits, CausticMap)] {
+        &self.pairs
     }
 }
 
 impl CausticsMethod for Splatting {
     fn record(&mut self, frame: &mut Frame<'_>) -> Result<(), MethodError> {
-        self.hits.record(frame)?;
-        {
-            let target = self.map.reconstruction_attachment();
-            let mut pass = self.splat_pass.begin(frame, &target, None)?;
-            for face in 0..6 {
-                self.map.set_face(&mut pass, face);
-                pass.draw(0..6 * self.hits.texels(), face..face + 1);
+        for ((hits, map), splat_pass) in self.pairs.iter().zip(&self.splat_passes) {
+            hits.record(frame)?;
+            {
+                let target = map.reconstruction_attachment();
+                let mut pass = splat_pass.begin(frame, &target, None)?;
+                for face in 0..6 {
+                    map.set_face(&mut pass, face);
+                    pass.draw(0..6 * hits.texels(), face..face + 1);
+                }
             }
+            map.record_lookup(frame)?;
         }
-        self.map.record_lookup(frame)
+        Ok(())
     }
 
     fn counters(&self, ctx: &GpuContext) -> Result<Counters, MethodError> {
-        let mut out = self.hits.counters(ctx)?;
+        let mut out = Counters::new();
+        for (hits, _) in &self.pairs {
+            photon_hits::add_counters(&mut out, hits.counters(ctx)?);
+        }
         out.insert("kernel_px".into(), self.kernel_px as u64);
         Ok(out)
     }

@@ -95,6 +95,13 @@ fn refracting_sphere_with_the_extended_light_paths_has_all_the_light() {
 }
 
 #[test]
+fn every_light_and_generator_pair_adds_its_caustic() {
+    caustics_testing::photon_hits::pairs_add_up(&caustics_method::registry_entry::<
+        splatting::Splatting,
+    >());
+}
+
+#[test]
 fn distance_test_removes_the_light_leak_onto_an_occluded_receiver() {
     caustics_testing::photon_hits::distance_test_removes_the_light_leak(
         &caustics_method::registry_entry::<splatting::Splatting>(),
