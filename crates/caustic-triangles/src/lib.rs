@@ -27,8 +27,11 @@
 //! 6. `camera_lookup` (§4.3): ρ/π · E at each camera pixel whose distance from the
 //!    centre matches the map's (`distance_test`).
 //!
-//! The photon hit image is one light view fitted to the generator (a cube for a light
-//! inside it); triangles do not cross between the faces of a cube view.
+//! Every pass runs once per (light, caustic generator) pair: each has its own photon
+//! hit image, one light view fitted to the generator (a cube for a light inside it),
+//! and its own cube map; the camera passes add up (§4.1). Triangles do not cross
+//! between the faces of a cube view, nor between the sheets of the light paths beyond
+//! the paper's (`bounces`, `reflections`: the [`photon_hits`] crate doc).
 //!
 //! ```no_run
 //! use caustics_gpu::{AdapterChoice, FrameMode, GpuContext, GpuScene, PassProfiler, Renderer};
