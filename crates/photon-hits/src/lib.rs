@@ -35,10 +35,15 @@
 //! camera passes add up. Light passing from one generator to another (a chain, the
 //! ball over the water) is dropped where it meets the second, not traced on.
 //!
-//! **Light paths.** The paper's path (the default) has one specular event per
-//! interface: light reflected inside a refractor (total internal or Fresnel) is
-//! dropped, so is the Fresnel reflection off the first interface, and so is a ray that
-//! meets a mirror generator a second time (the ring's opposite wall). Two parameters
+//! **Light paths.** The default path has one specular event per interface, the path
+//! whose power §4.1 gives as "the power going through a pixel of the light's camera
+//! and the Fresnel factors along the path (or the complement of the Fresnel if
+//! refraction happens)": light reflected inside a refractor (total internal or
+//! Fresnel) is dropped, so is the Fresnel reflection off the first interface, and so
+//! is a ray that meets a mirror generator a second time (the ring's opposite wall).
+//! (The paper's ray "is traced, possibly multiple times, until a diffuse or glossy
+//! surface is found", which leaves open whether it follows total internal reflection;
+//! the default does not.) Two parameters
 //! extend it ([`PhotonHitConfig::bounces`], [`PhotonHitConfig::reflections`]):
 //! each further path gets a *sheet* of the hit image of its own (the light leaving a
 //! closed refractor after j internal reflections is sheet j; the reflection off the
@@ -125,7 +130,7 @@ caustics_method::method_params! {
         distance_test: bool = true;
         /// distance test: |stored - actual| <= tolerance x actual
         distance_tolerance: f64 = 0.05 => above(0.0, 1.0);
-        /// further specular events followed on the generator: internal reflections in a closed refractor (Fresnel and total), further reflections off a mirror (paper: 0)
+        /// further specular events followed on the generator: internal reflections in a closed refractor (Fresnel and total), further reflections off a mirror (default 0: one event per interface)
         bounces: u32 = 0 => closed(0.0, 8.0);
         /// also follow the Fresnel reflection off a dielectric's first interface (paper: false)
         reflections: bool = false;
@@ -371,7 +376,7 @@ pub struct PhotonHits {
     pub layers: u32,
     /// Faces of the light view (1, or 6 for a light inside the generator's bounds).
     pub faces: u32,
-    /// Sheets: specular paths a texel's light may take (1 on the paper's path).
+    /// Sheets: specular paths a texel's light may take (1 on the default path).
     pub sheets: u32,
     /// Valid-hit counters to report beyond the reasons: (counter index, name).
     order_counters: Vec<(usize, String)>,

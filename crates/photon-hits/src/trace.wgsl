@@ -8,8 +8,9 @@
 // map of the environment). The texel's flux is the light's power through the texel
 // times the Fresnel transmittances or the mirror's reflectance (§4.1).
 //
-// That is the paper's path, sheet 0 of the hit image. Beyond it (off by default, the
-// `bounces` and `reflections` parameters) each texel also follows:
+// That is the default path (one event per interface, §4.1's Fresnel factors), sheet 0
+// of the hit image. Beyond it (off by default, the `bounces` and `reflections`
+// parameters) each texel also follows:
 // * inside a closed refractor, the light reflected at the exit (Fresnel, or all of it
 //   under total internal reflection), up to `bounces` internal reflections; the light
 //   leaving after j of them is sheet j, so each sheet is one smooth specular path and
@@ -60,7 +61,7 @@ const FLAG_ORTHOGRAPHIC: u32 = 2u;
 const COUNTER_REFLECTED: u32 = 8u;
 const COUNTER_BOUNCE: u32 = 9u;
 // Path ids: (generator × 2 + side) × PATH_ORDERS + order, where order is the number of
-// specular events beyond the paper's path, or PATH_REFLECTED for the Fresnel reflection.
+// specular events beyond the default path, or PATH_REFLECTED for the Fresnel reflection.
 const PATH_ORDERS: u32 = 16u;
 const PATH_REFLECTED: u32 = 15u;
 
