@@ -445,11 +445,28 @@ fn ensure_references(
         let params = serde_json::Value::Object(spec.params.clone());
         let info = crate::registry::find(&spec.method)?;
         let runnable = (info.parse)(&params).is_ok_and(|p| info.supports(scene, &p).is_ok());
-        if !runnable
-            || seen.contains(&label)
-            || crate::references::find(&args.references, scene)?.is_some()
-        {
+        if !runnable || seen.contains(&label) {
             continue;
+        }
+        // A cached reference serves if it has at least the experiment's photons (any
+        // seed is as good a reference); one with fewer would score the runs against
+        // more noise than the experiment states, so it is rendered again when allowed.
+        let budget = e.def.reference.filter(|_| !args.no_render_references);
+        if let Some(cached) = crate::references::find(&args.references, scene)? {
+            match budget {
+                Some(b) if cached.meta.photons < b.photons => {
+                    eprintln!(
+                        "reference {label}: the cached one has {} photons, the experiment asks {}: rendering it again",
+                        cached.meta.photons, b.photons
+                    );
+                    // meta.json first: until the new one is written the folder is
+                    // incomplete, never a mix of two renders that passes for one.
+                    let meta = cached.dir.join("meta.json");
+                    std::fs::remove_file(&meta)
+                        .with_context(|| format!("removing {}", meta.display()))?;
+                }
+                _ => continue,
+            }
         }
         seen.insert(label.clone());
         // A killed render's temporaries (the cache is shared: only dead writers' go).
@@ -457,7 +474,7 @@ fn ensure_references(
             &crate::references::cache_dir(&args.references, scene),
             false,
         )?;
-        match e.def.reference.filter(|_| !args.no_render_references) {
+        match budget {
             Some(budget) => {
                 let dir = crate::references::cache_dir(&args.references, scene);
                 let progress = bar(budget.photons, &format!("photons, reference {label}"));

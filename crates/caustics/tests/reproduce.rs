@@ -315,3 +315,64 @@ fn a_bad_experiment_fails_before_any_run_or_write() {
         assert!(!out.exists());
     }
 }
+
+#[test]
+fn a_cached_reference_with_fewer_photons_than_asked_is_rendered_again() {
+    use caustics::references::{ReferenceMeta, cache_dir, find};
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let exp = tmp.path().join("experiments");
+    std::fs::create_dir_all(&exp).expect("mkdir");
+    std::fs::write(
+        exp.join("one.json"),
+        r#"{"name": "one", "description": "one run, 32x24", "resolution": {"width": 32, "height": 24},
+            "frames": 1, "warmup": 0, "reference": {"photons": 20000, "seed": 1, "batches": 4},
+            "runs": [{"label": "ring", "scenes": ["ring"], "methods": ["wavefront"]}]}"#,
+    )
+    .expect("write");
+    let mut a = args(tmp.path(), &exp, "out", None);
+    a.name = "one".into();
+    // A cached ring reference of 100 photons (all-ones images), as an earlier, cheaper
+    // experiment would leave.
+    let mut scene = caustics_scene::Scene::load(&caustics_scene::resolve("ring").expect("ring"))
+        .expect("scene");
+    scene.camera.width = 32;
+    scene.camera.height = 24;
+    let dir = cache_dir(&a.references, &scene);
+    std::fs::create_dir_all(&dir).expect("mkdir");
+    let mut ones = caustics_metrics::HdrImage::new(32, 24);
+    ones.pixels.iter_mut().for_each(|p| *p = [1.0; 3]);
+    for f in ["caustic.exr", "stderr.exr"] {
+        caustics_metrics::write_exr(&dir.join(f), &ones).expect("write");
+    }
+    let meta = ReferenceMeta {
+        schema_version: 2,
+        transport_version: caustics_reference::TRANSPORT_VERSION,
+        scene: scene.name.clone(),
+        scene_hash: scene.hash_hex(),
+        width: 32,
+        height: 24,
+        photons: 100,
+        seconds: 1.0,
+        photons_per_second: 100.0,
+        seed: 1,
+        batches: 4,
+        commit: "test".into(),
+        relative_stderr: 0.5,
+    };
+    std::fs::write(
+        dir.join("meta.json"),
+        serde_json::to_vec(&meta).expect("json"),
+    )
+    .expect("write");
+    let done = reproduce(&a).expect("reproduce");
+    assert_eq!(done.failed, 0);
+    let cached = find(&a.references, &scene)
+        .expect("cache")
+        .expect("a reference");
+    assert!(cached.meta.photons >= 20000, "{:?}", cached.meta);
+    let image = caustics_metrics::read_exr(&cached.caustic()).expect("exr");
+    assert_ne!(
+        image.pixels, ones.pixels,
+        "the 100-photon image is still there"
+    );
+}
