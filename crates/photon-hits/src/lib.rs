@@ -568,15 +568,6 @@ impl PhotonHits {
         Ok(())
     }
 
-    /// Counters of the last frame of every hit image of `all`, summed by name.
-    pub fn counters_of(all: &[Self], ctx: &GpuContext) -> Result<Counters, MethodError> {
-        let mut total = Counters::new();
-        for hits in all {
-            add_counters(&mut total, hits.counters(ctx)?);
-        }
-        Ok(total)
-    }
-
     /// Counters of the last frame: texels, valid hits and why the others are invalid.
     pub fn counters(&self, ctx: &GpuContext) -> Result<Counters, MethodError> {
         let c = caustics_gpu::readback::read_buffer_u32(
