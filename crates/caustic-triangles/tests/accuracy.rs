@@ -7,22 +7,11 @@
 
 use caustic_triangles::photon_hits::PhotonHitConfig;
 use caustic_triangles::{CausticTriangles, CausticTrianglesParams};
-use caustics_gpu::RendererOptions;
 use caustics_scene::{Scene, Vec3};
 use caustics_testing::{Bounds, Gpu, artifacts, builtin, plane_hit, refracting_sphere, scene};
 
-/// The uploaded scene with small shadow maps, and the method built directly (these
-/// tests read its photon hits and vertex irradiance back), after one frame.
-fn run_concrete(scene: Scene, params: &CausticTrianglesParams) -> (Gpu, CausticTriangles) {
-    let options = RendererOptions {
-        shadow_resolution: 256,
-        cube_shadow_resolution: 128,
-    };
-    let gpu = Gpu::with_options(scene, options);
-    let mut m = CausticTriangles::new(&gpu.ctx, &gpu.renderer, params).expect("method");
-    gpu.frame(&mut m);
-    (gpu, m)
-}
+mod common;
+use common::{fresnel, run_concrete};
 
 /// A 1 m glass slab surface (an open refractor, one interface) 1 m above a diffuse
 /// floor, under a slanted directional light; the camera sits below the slab, so it sees
@@ -42,15 +31,6 @@ fn flat_refractor_scene(direction: [f64; 3], irradiance: [f64; 3]) -> Scene {
             {"shape": {"type": "quad", "center": [0, 0, 0], "normal": [0, 1, 0], "size": [6, 6]}, "material": "floor"}
         ]
     }))
-}
-
-/// Exact unpolarized Fresnel reflectance (DESIGN "Conventions"), eta = n_i / n_t.
-fn fresnel(cos_i: f64, eta: f64) -> f64 {
-    let sin2_t = eta * eta * (1.0 - cos_i * cos_i);
-    let cos_t = (1.0 - sin2_t).sqrt();
-    let rs = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
-    let rp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
-    0.5 * (rs * rs + rp * rp)
 }
 
 /// (interior vertices checked, worst relative error of their irradiance against `want`):

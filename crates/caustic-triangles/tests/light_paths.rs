@@ -1,26 +1,17 @@
-//! The photon hit image's light paths beyond the paper's (`bounces`,
+//! The photon hit image's light paths beyond the default one (`bounces`,
 //! `reflections`, the `photon_hits` crate doc), through `caustic-triangles`, which
 //! reads the hits and per-vertex irradiance back: the Fresnel reflection's own sheet
-//! carries the analytic irradiance, the paper's sheet is untouched by the extension,
+//! carries the analytic irradiance, the default sheet is untouched by the extension,
 //! and with enough bounces a glass sphere delivers all the light that enters it. On
 //! whatever adapter the machine has (lavapipe on CI; no adapter fails, never skips).
 
 use caustic_triangles::photon_hits::{PhotonHit, PhotonHitConfig};
-use caustic_triangles::{CausticTriangles, CausticTrianglesParams, VertexArea};
-use caustics_gpu::RendererOptions;
+use caustic_triangles::{CausticTrianglesParams, VertexArea};
 use caustics_scene::Scene;
-use caustics_testing::{Gpu, scene};
+use caustics_testing::scene;
 
-fn run_concrete(scene: Scene, params: &CausticTrianglesParams) -> (Gpu, CausticTriangles) {
-    let options = RendererOptions {
-        shadow_resolution: 256,
-        cube_shadow_resolution: 128,
-    };
-    let gpu = Gpu::with_options(scene, options);
-    let mut m = CausticTriangles::new(&gpu.ctx, &gpu.renderer, params).expect("method");
-    gpu.frame(&mut m);
-    (gpu, m)
-}
+mod common;
+use common::{fresnel, run_concrete};
 
 fn params(resolution: u32, bounces: u32, reflections: bool) -> CausticTrianglesParams {
     CausticTrianglesParams {
@@ -34,15 +25,6 @@ fn params(resolution: u32, bounces: u32, reflections: bool) -> CausticTrianglesP
         },
         ..Default::default()
     }
-}
-
-/// Exact unpolarized Fresnel reflectance (DESIGN "Conventions"), eta = n_i / n_t.
-fn fresnel(cos_i: f64, eta: f64) -> f64 {
-    let sin2_t = eta * eta * (1.0 - cos_i * cos_i);
-    let cos_t = (1.0 - sin2_t).sqrt();
-    let rs = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
-    let rp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
-    0.5 * (rs * rs + rp * rp)
 }
 
 /// A 45° glass quad (an open refractor) 1 m above a floor turns a light travelling
