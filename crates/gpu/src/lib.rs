@@ -37,6 +37,7 @@ pub mod scene_upload;
 pub mod scoring;
 pub mod shader;
 pub mod textures;
+pub mod triangle_bvh;
 
 pub use context::{
     ADAPTER_ENV, AdapterChoice, AdapterSummary, GpuContext, OPTIONAL_FEATURES, REQUIRED_FEATURES,

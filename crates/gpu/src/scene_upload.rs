@@ -1,12 +1,13 @@
 //! One upload per scene: triangles for rasterization, and the analytic shape, material
 //! and light tables every shader reads (layouts mirrored in `shaders/common.wgsl`).
 
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 use bytemuck::{Pod, Zeroable};
 use caustics_scene::{Light, Material, Scene, Shape, Tessellation, TriangleMesh};
 use wgpu::util::DeviceExt;
 
+use crate::triangle_bvh::SceneTriangles;
 use crate::{GpuContext, GpuError};
 
 /// Vertex of the rasterized scene: world position, world normal, object and material ids.
@@ -163,8 +164,11 @@ pub struct GpuScene {
     pub lights_buffer: wgpu::Buffer,
     /// `array<GpuWave>` of all heightfields (at least one entry).
     pub waves_buffer: wgpu::Buffer,
-    /// Bytes of GPU memory the upload owns.
+    /// Bytes of GPU memory the upload owns (the triangle BVH not included: the method
+    /// that asks for it counts it).
     pub bytes: u64,
+    /// Meshes and heightfields in one BVH, built on first use.
+    triangle_bvh: OnceLock<SceneTriangles>,
 }
 
 /// Table entries of one shape, without the triangle range.
@@ -384,7 +388,19 @@ impl GpuScene {
             lights_buffer,
             waves_buffer,
             bytes,
+            triangle_bvh: OnceLock::new(),
         })
+    }
+
+    /// The scene's meshes and heightfields in one BVH on the GPU, for passes that trace
+    /// rays against the whole scene (`triangle_bvh::wgsl`). Built and uploaded on the
+    /// first call, then shared: one upload per scene.
+    pub fn triangle_bvh(&self, ctx: &GpuContext) -> Result<&SceneTriangles, GpuError> {
+        if let Some(bvh) = self.triangle_bvh.get() {
+            return Ok(bvh);
+        }
+        let bvh = SceneTriangles::upload(ctx, &self.scene, &self.meshes)?;
+        Ok(self.triangle_bvh.get_or_init(|| bvh))
     }
 }
 

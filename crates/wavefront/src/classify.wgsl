@@ -1,6 +1,7 @@
-// Pass 2 of wavefront: keep the triangles whose three vertices are valid and land on
-// the same side of the same receiver, from the same face of the generator (a
-// triangle spanning two receivers or two faces has no single area to take a ratio of), as one flag per triangle. Dropped triangles are
+// Pass 2 of wavefront: keep the triangles whose three vertices are valid, took the
+// same specular path (same objects, same sides, in the same order) and land on the
+// same side of the same receiver (a triangle spanning two receivers or two paths has
+// no single area to take a ratio of), as one flag per triangle. Dropped triangles are
 // counted by reason. Flags rather than a compacted list: the splat pass then draws
 // in triangle order, so additive blending sums in the same order every frame and
 // the image is bit-for-bit deterministic (an atomic compaction order is not).
@@ -9,7 +10,7 @@ struct Counters {
     kept: atomic<u32>,
     dropped_invalid_vertex: atomic<u32>,
     dropped_receiver_mismatch: atomic<u32>,
-    dropped_face_mismatch: atomic<u32>,
+    dropped_path_mismatch: atomic<u32>,
 }
 
 @group(1) @binding(0) var<uniform> tp: TraceParams;
@@ -37,7 +38,7 @@ fn classify_triangles(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     if a.info.z != b.info.z || a.info.z != c.info.z {
-        atomicAdd(&counters.dropped_face_mismatch, 1u);
+        atomicAdd(&counters.dropped_path_mismatch, 1u);
         return;
     }
     keep[tri] = 1u;

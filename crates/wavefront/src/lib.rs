@@ -12,19 +12,25 @@
 //! transmittance of each interface, so the result is absolute radiance
 //! ρ/π · E in DESIGN units. For flat water it is exactly ρ/π · T(θ) · E · cos θ.
 //!
-//! Supports one caustic generator: a dielectric heightfield or quad (refracted once,
-//! Wallace's water) or sphere (refracted on entry and exit), or a mirror sphere, quad
-//! or open cylinder (reflected once, Wallace's "reflection off the top of the water"
-//! and Wand's ring); one light of any kind; analytic diffuse receivers (quads,
-//! spheres, cylinders). It does not follow chains of specular events (a ray that meets
-//! a specular surface again is dropped), meshes or media: such scenes are skipped with
-//! the reason. Like the original, it ignores the light reflected at dielectric
-//! interfaces and point-samples triangles thinner than a pixel (noisy cusps).
+//! Every specular object under every light is one wavefront (a *sheet*; the sheets add
+//! up). A sheet's vertices start on the generator (the water mesh itself for a
+//! heightfield, else a lattice of light rays over its bounding sphere) and are traced
+//! through every specular surface they meet, a chain of generators included (a glass
+//! sphere over water, two lenses): analytic shapes exactly, meshes and heightfields
+//! through the scene's triangle BVH (`caustics_gpu::triangle_bvh`) with interpolated
+//! normals and the adjoint shading-normal factor the reference applies. Receivers may
+//! be any diffuse object the camera G-buffer shows. By default a path passes each
+//! specular object once, as Wallace's single refraction does: total internal
+//! reflection and a second hit on an object already left end it. `bounces` follows up
+//! to that many such further events; each different path is its own part of the
+//! wavefront (classify.wgsl keeps triangles whose vertices took one path). Like the
+//! original, it ignores the light reflected at dielectric interfaces and
+//! point-samples triangles thinner than a pixel (noisy cusps); it renders no media.
 
 mod sources;
 
 use bytemuck::{Pod, Zeroable};
-use caustics_gpu::pass::{ComputePass, RasterPass, Shader};
+use caustics_gpu::pass::{BindGroupSchema, ComputePass, RasterPass, Shader};
 use caustics_gpu::textures::{additive_hdr_target, load_attachment};
 use caustics_gpu::wgpu::{self, util::DeviceExt};
 use caustics_gpu::{Frame, GpuContext, Renderer, shader};
@@ -47,6 +53,14 @@ fn pass_source(pass: &str) -> String {
     shader::compose_method(&format!("{TYPES_WGSL}\n{pass}"))
 }
 
+/// The trace pass also traces rays against the scene's triangle BVH (group 2).
+fn trace_source() -> String {
+    shader::compose_method(&format!(
+        "{TYPES_WGSL}\n{}\n{TRACE_WGSL}",
+        caustics_gpu::triangle_bvh::wgsl(2)
+    ))
+}
+
 /// Registry name.
 pub const NAME: &str = "wavefront";
 
@@ -59,6 +73,13 @@ method_params! {
         /// receiver match: max |G-buffer position - triangle point| / distance to eye
         /// (at most 0.5: a looser match accepts light on whatever surface is in front)
         tolerance: f64 = 2e-3 => above(0.0, 0.5);
+        /// further specular events: sheets of light reflected 1..=bounces times inside a
+        /// closed refractor before it leaves (Fresnel and total), and as many hits on
+        /// an object a path has already left (a mirror's opposite wall) (0: Wallace's
+        /// single pass; at most 8)
+        bounces: u32 = 0 => closed(0.0, 8.0);
+        /// also a sheet of the Fresnel reflection off each dielectric generator (Wallace: false)
+        reflections: bool = false;
     }
 }
 
@@ -73,7 +94,7 @@ impl Method for Wavefront {
         volume: false,
         reflection: true,
         refraction: true,
-        multiple_bounces: false,
+        multiple_bounces: true,
         directional_light: true,
         point_light: true,
         spot_light: true,
@@ -92,85 +113,42 @@ impl Method for Wavefront {
     }
 }
 
-/// The one specular object `wavefront` traces light through (the caustic
-/// generator), or why the scene is out of reach: a dielectric heightfield, quad or
-/// sphere, or a mirror sphere, quad or open cylinder; every other object an analytic
-/// diffuse receiver.
-pub fn caustic_generator(scene: &Scene) -> Result<usize, Unsupported> {
-    if scene.lights.len() != 1 {
-        return Err(Unsupported(format!(
-            "needs exactly one light, the scene has {}",
-            scene.lights.len()
-        )));
+/// The caustic generators `wavefront` builds a wavefront for: every specular object
+/// (each under each light is one sheet of the caustic), or why the scene is out of
+/// reach.
+pub fn caustic_generators(scene: &Scene) -> Result<Vec<usize>, Unsupported> {
+    if scene.lights.is_empty() {
+        return Err(Unsupported("the scene has no light".into()));
     }
-    let mut generator = None;
-    for (i, o) in scene.objects.iter().enumerate() {
-        let material = scene.material(o);
-        if !material.is_specular() {
-            match &o.shape {
-                Shape::Mesh(_) => {
-                    return Err(Unsupported(format!(
-                        "objects[{i}] is a mesh; wavefront traces analytic shapes only"
-                    )));
-                }
-                Shape::Heightfield(_) => {
-                    return Err(Unsupported(format!(
-                        "objects[{i}] is a diffuse heightfield; wavefront receivers must be analytic"
-                    )));
-                }
-                _ => continue,
-            }
-        }
-        let supported = matches!(
-            (material, &o.shape),
-            (
-                Material::Dielectric { .. },
-                Shape::Heightfield(_) | Shape::Quad { .. } | Shape::Sphere { .. }
-            ) | (
-                Material::Mirror { .. },
-                Shape::Sphere { .. } | Shape::Quad { .. } | Shape::Cylinder { .. }
-            )
-        );
-        if !supported {
-            return Err(Unsupported(format!(
-                "objects[{i}] is a specular {} ({}); wavefront traces dielectric heightfields, quads and spheres and mirror spheres, quads and cylinders",
-                shape_name(&o.shape),
-                if matches!(material, Material::Mirror { .. }) {
-                    "mirror"
-                } else {
-                    "dielectric"
-                }
-            )));
-        }
-        if let Some(first) = generator {
-            return Err(Unsupported(format!(
-                "objects[{first}] and objects[{i}] are both specular; wavefront follows one specular event (no chains)"
-            )));
-        }
-        generator = Some(i);
+    let generators: Vec<usize> = scene
+        .objects
+        .iter()
+        .enumerate()
+        .filter(|(_, o)| scene.material(o).is_specular())
+        .map(|(i, _)| i)
+        .collect();
+    if generators.is_empty() {
+        return Err(Unsupported("the scene has no specular object".into()));
     }
-    generator.ok_or_else(|| Unsupported("the scene has no specular object".into()))
-}
-
-fn shape_name(s: &Shape) -> &'static str {
-    match s {
-        Shape::Sphere { .. } => "sphere",
-        Shape::Quad { .. } => "quad",
-        Shape::Heightfield(_) => "heightfield",
-        Shape::Cylinder { .. } => "cylinder",
-        Shape::Mesh(_) => "mesh",
+    if scene.objects.len() == generators.len() {
+        return Err(Unsupported("the scene has no diffuse receiver".into()));
     }
+    Ok(generators)
 }
 
 fn check_scene(scene: &Scene) -> Result<(), Unsupported> {
-    let g = caustic_generator(scene)?;
-    let shape = &scene.objects[g].shape;
-    if !matches!(shape, Shape::Heightfield(_)) {
+    for g in caustic_generators(scene)? {
+        let shape = &scene.objects[g].shape;
+        if matches!(shape, Shape::Heightfield(_)) {
+            continue;
+        }
         let (center, radius) = sources::bounding_sphere(shape);
-        if sources::ray_lattice(center, radius, &scene.lights[0], 2).is_none() {
-            return Err(Unsupported(format!(
-                "the light is inside the bounding sphere of the generator objects[{g}], which wavefront's ray lattice must see from outside"
-            )));
+        for (l, light) in scene.lights.iter().enumerate() {
+            if sources::ray_lattice(center, radius, light, 2).is_none() {
+                return Err(Unsupported(format!(
+                    "lights[{l}] is inside the bounding sphere of the generator objects[{g}], which wavefront's ray lattice must see from outside"
+                )));
+            }
         }
     }
     Ok(())
@@ -184,6 +162,9 @@ struct TraceParams {
     light_index: u32,
     source_count: u32,
     triangle_count: u32,
+    bounces: u32,
+    reflect_mask: u32,
+    _pad: [u32; 2],
 }
 
 /// Matches `SplatParams` in splat.wgsl.
@@ -194,40 +175,275 @@ struct SplatParams {
     _pad: [f32; 3],
 }
 
-/// Kept and dropped triangle counts (matches `Counters` in classify.wgsl).
-const COUNTERS_INIT: [u32; 4] = [0; 4];
+/// Names of the kept and dropped triangle counts, in the order of `Counters` in
+/// classify.wgsl.
+const TRIANGLE_COUNTERS: [&str; 4] = [
+    "kept_triangles",
+    "dropped_invalid_vertex",
+    "dropped_receiver_mismatch",
+    "dropped_path_mismatch",
+];
+
+/// Names of the vertex outcomes, in the order of `VertexCounts` in trace.wgsl (the
+/// `INVALID_*` codes, then the landed vertices whose path used a further bounce).
+const VERTEX_COUNTERS: [&str; 10] = [
+    "vertices_landed",
+    "vertices_missed_generator",
+    "vertices_shadowed",
+    "vertices_total_internal_reflection",
+    "vertices_no_receiver",
+    "vertices_rehit",
+    "vertices_wrong_side",
+    "vertices_too_many_events",
+    "vertices_other_sheet",
+    "vertices_landed_after_rehit",
+];
+
+/// The sheets of one generator: the `reflect_mask` of each (trace.wgsl). Light
+/// transmitted at every interface first; then, for a closed refractor, the light that
+/// reflects 1..=`bounces` times inside before leaving; then the Fresnel reflection off
+/// a dielectric's outside.
+fn sheet_masks(shape: &Shape, material: &Material, params: &WavefrontParams) -> Vec<u32> {
+    let mut masks = vec![0];
+    if !matches!(material, Material::Dielectric { .. }) {
+        return masks;
+    }
+    if matches!(shape, Shape::Sphere { .. } | Shape::Mesh(_)) {
+        // Bits 1..=j: reflect at the first j exits.
+        masks.extend((1..=params.bounces).map(|j| ((1u32 << (j + 1)) - 1) & !1));
+    }
+    if params.reflections {
+        masks.push(1);
+    }
+    masks
+}
+
+/// One wavefront: a generator under a light, its buffers and bind groups.
+struct Sheet {
+    source_count: u32,
+    triangle_count: u32,
+    trace_group: wgpu::BindGroup,
+    classify_group: wgpu::BindGroup,
+    splat_group: wgpu::BindGroup,
+    bytes: u64,
+}
 
 /// `wavefront` bound to one scene.
 pub struct Wavefront {
     trace: ComputePass,
     classify: ComputePass,
     splat: RasterPass,
-    counters: wgpu::Buffer,
+    sheets: Vec<Sheet>,
+    /// `TRIANGLE_COUNTERS` and `VERTEX_COUNTERS`, summed over the sheets.
+    triangle_counts: wgpu::Buffer,
+    vertex_counts: wgpu::Buffer,
+    /// Zeros, copied over both counter buffers at the start of every frame.
     counters_init: wgpu::Buffer,
-    source_count: u32,
-    triangle_count: u32,
+    bvh_triangles: u32,
     bytes: u64,
 }
 
-/// The buffers the three passes share.
-struct Buffers {
-    trace_params: wgpu::Buffer,
-    splat_params: wgpu::Buffer,
-    sources: wgpu::Buffer,
-    triangles: wgpu::Buffer,
-    traced: wgpu::Buffer,
-    keep: wgpu::Buffer,
-    counters: wgpu::Buffer,
-    counters_init: wgpu::Buffer,
+impl Wavefront {
+    /// Builds one wavefront per (light, specular object) and Wallace's three passes:
+    /// trace the rays, flag the triangles that stay on one path to one receiver, draw
+    /// them with the area ratio as brightness.
+    pub fn new(
+        ctx: &GpuContext,
+        renderer: &Renderer,
+        params: &WavefrontParams,
+    ) -> Result<Self, MethodError> {
+        let gpu_scene = renderer.scene();
+        let scene = &gpu_scene.scene;
+        let unsupported = |reason| MethodError::Unsupported {
+            method: NAME,
+            scene: scene.name.clone(),
+            reason,
+        };
+        check_scene(scene).map_err(unsupported)?;
+        let generators = caustic_generators(scene).map_err(unsupported)?;
+        let bvh = gpu_scene.triangle_bvh(ctx)?;
+        let device = &ctx.device;
+
+        let shader = Shader::new(ctx, "wavefront trace.wgsl", trace_source())?;
+        let trace = ComputePass::builder(ctx, "wavefront/trace_vertices", &shader)
+            .frame(renderer)
+            .caller_group(1)
+            .bind(
+                2,
+                &[("bvh_nodes", &bvh.nodes), ("bvh_triangles", &bvh.triangles)],
+            )
+            .kernels(&["trace_vertices"])
+            .build()?;
+        let shader = Shader::new(ctx, "wavefront classify.wgsl", pass_source(CLASSIFY_WGSL))?;
+        let classify = ComputePass::builder(ctx, "wavefront/classify_triangles", &shader)
+            .frame(renderer)
+            .caller_group(1)
+            .kernels(&["classify_triangles"])
+            .build()?;
+        // Folded triangles face away: both windings count (the builder culls nothing).
+        let shader = Shader::new(ctx, "wavefront splat.wgsl", pass_source(SPLAT_WGSL))?;
+        let splat = RasterPass::builder(ctx, "wavefront/splat", &shader, "vs_splat")
+            .frame(renderer)
+            .caller_group(1)
+            .fragment("fs_splat", &[Some(additive_hdr_target())])
+            .counted()
+            .build()?;
+        let (trace_schema, classify_schema, splat_schema) = (
+            group_one(trace.schema(1), "trace")?,
+            group_one(classify.schema(1), "classify")?,
+            group_one(splat.schema(1), "splat")?,
+        );
+
+        let zeros = [0u32; TRIANGLE_COUNTERS.len() + VERTEX_COUNTERS.len()];
+        let (triangle_counts, vertex_counts, counters_init) =
+            ctx.checked("wavefront counters", || {
+                let init = |label: &str, words: usize, usage| {
+                    device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                        label: Some(label),
+                        contents: bytemuck::cast_slice(&zeros[..words]),
+                        usage,
+                    })
+                };
+                let counted = wgpu::BufferUsages::STORAGE
+                    | wgpu::BufferUsages::COPY_DST
+                    | wgpu::BufferUsages::COPY_SRC;
+                (
+                    init(
+                        "wavefront triangle counts",
+                        TRIANGLE_COUNTERS.len(),
+                        counted,
+                    ),
+                    init("wavefront vertex counts", VERTEX_COUNTERS.len(), counted),
+                    init(
+                        "wavefront counters reset",
+                        zeros.len(),
+                        wgpu::BufferUsages::COPY_SRC,
+                    ),
+                )
+            })?;
+
+        let splat_params = SplatParams {
+            tolerance: params.tolerance as f32,
+            _pad: [0.0; 3],
+        };
+        let mut sheets = Vec::new();
+        let mut lattice_bytes = 0;
+        for (light_index, light) in scene.lights.iter().enumerate() {
+            for &generator in &generators {
+                let object = &scene.objects[generator];
+                let masks = sheet_masks(&object.shape, scene.material(object), params);
+                let mesh = sources::for_shape(
+                    &scene.objects[generator].shape,
+                    &gpu_scene.meshes[generator],
+                    light,
+                    params.grid,
+                )
+                .ok_or_else(|| {
+                    unsupported(Unsupported(format!(
+                        "cannot build a wavefront for objects[{generator}] under lights[{light_index}]"
+                    )))
+                })?;
+                // One upload of the lattice per (light, generator); its sheets share it.
+                let (sources, triangles) = ctx.checked("wavefront lattice", || {
+                    let init = |label: &str, contents: &[u8]| {
+                        device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                            label: Some(label),
+                            contents,
+                            usage: wgpu::BufferUsages::STORAGE,
+                        })
+                    };
+                    (
+                        init("wavefront sources", bytemuck::cast_slice(&mesh.sources)),
+                        init("wavefront triangles", bytemuck::cast_slice(&mesh.triangles)),
+                    )
+                })?;
+                lattice_bytes += sources.size() + triangles.size();
+                for reflect_mask in masks {
+                    let trace_params = TraceParams {
+                        specular_object: generator as u32,
+                        light_index: light_index as u32,
+                        source_count: mesh.sources.len() as u32,
+                        triangle_count: (mesh.triangles.len() / 3) as u32,
+                        bounces: params.bounces,
+                        reflect_mask,
+                        _pad: [0; 2],
+                    };
+                    sheets.push(ctx.checked("wavefront sheet", || {
+                        Sheet::new(
+                            device,
+                            Lattice {
+                                sources: &sources,
+                                triangles: &triangles,
+                            },
+                            &trace_params,
+                            &splat_params,
+                            SheetGroups {
+                                trace: trace_schema,
+                                classify: classify_schema,
+                                splat: splat_schema,
+                                triangle_counts: &triangle_counts,
+                                vertex_counts: &vertex_counts,
+                            },
+                        )
+                    })??);
+                }
+            }
+        }
+        let bytes = sheets.iter().map(|s| s.bytes).sum::<u64>()
+            + lattice_bytes
+            + triangle_counts.size()
+            + vertex_counts.size()
+            + counters_init.size()
+            + bvh.bytes;
+        Ok(Self {
+            trace,
+            classify,
+            splat,
+            sheets,
+            triangle_counts,
+            vertex_counts,
+            counters_init,
+            bvh_triangles: bvh.triangle_count,
+            bytes,
+        })
+    }
 }
 
-impl Buffers {
+/// The layout of a pass's group 1 (each sheet binds its own buffers there).
+fn group_one<'a>(
+    schema: Option<&'a BindGroupSchema>,
+    pass: &str,
+) -> Result<&'a BindGroupSchema, MethodError> {
+    schema.ok_or_else(|| {
+        MethodError::Gpu(caustics_gpu::GpuError::Invalid(format!(
+            "wavefront {pass}.wgsl declares no group 1"
+        )))
+    })
+}
+
+/// The per-sheet bind groups' layouts and the counters every sheet adds to.
+struct SheetGroups<'a> {
+    trace: &'a BindGroupSchema,
+    classify: &'a BindGroupSchema,
+    splat: &'a BindGroupSchema,
+    triangle_counts: &'a wgpu::Buffer,
+    vertex_counts: &'a wgpu::Buffer,
+}
+
+/// A wavefront's vertices and triangles on the GPU, shared by its sheets.
+struct Lattice<'a> {
+    sources: &'a wgpu::Buffer,
+    triangles: &'a wgpu::Buffer,
+}
+
+impl Sheet {
     fn new(
         device: &wgpu::Device,
-        mesh: &WavefrontMesh,
+        lattice: Lattice<'_>,
         trace: &TraceParams,
         splat: &SplatParams,
-    ) -> Self {
+        groups: SheetGroups<'_>,
+    ) -> Result<Self, caustics_gpu::GpuError> {
         let init = |label: &str, contents: &[u8], usage| {
             device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some(label),
@@ -244,158 +460,54 @@ impl Buffers {
             })
         };
         let uniform = wgpu::BufferUsages::UNIFORM;
-        Self {
-            trace_params: init("wavefront trace params", bytemuck::bytes_of(trace), uniform),
-            splat_params: init("wavefront splat params", bytemuck::bytes_of(splat), uniform),
-            sources: init(
-                "wavefront sources",
-                bytemuck::cast_slice(&mesh.sources),
-                wgpu::BufferUsages::STORAGE,
-            ),
-            triangles: init(
-                "wavefront triangles",
-                bytemuck::cast_slice(&mesh.triangles),
-                wgpu::BufferUsages::STORAGE,
-            ),
-            // One `Traced` (64 bytes) per source, one flag per triangle.
-            traced: storage("wavefront traced vertices", trace.source_count as u64 * 64),
-            keep: storage(
-                "wavefront keep flags",
-                trace.triangle_count.max(1) as u64 * 4,
-            ),
-            counters: init(
-                "wavefront counters",
-                bytemuck::cast_slice(&COUNTERS_INIT),
-                wgpu::BufferUsages::STORAGE
-                    | wgpu::BufferUsages::COPY_DST
-                    | wgpu::BufferUsages::COPY_SRC,
-            ),
-            counters_init: init(
-                "wavefront counters reset",
-                bytemuck::cast_slice(&COUNTERS_INIT),
-                wgpu::BufferUsages::COPY_SRC,
-            ),
-        }
-    }
-
-    fn bytes(&self) -> u64 {
-        [
-            &self.trace_params,
-            &self.splat_params,
-            &self.sources,
-            &self.triangles,
-            &self.traced,
-            &self.keep,
-            &self.counters,
-            &self.counters_init,
-        ]
-        .iter()
-        .map(|b| b.size())
-        .sum()
-    }
-}
-
-impl Wavefront {
-    /// Builds the wavefront of the scene's caustic generator and Wallace's three
-    /// passes: trace the rays, flag the triangles that stay on one receiver, draw them
-    /// with the area ratio as brightness.
-    pub fn new(
-        ctx: &GpuContext,
-        renderer: &Renderer,
-        params: &WavefrontParams,
-    ) -> Result<Self, MethodError> {
-        let gpu_scene = renderer.scene();
-        let scene = &gpu_scene.scene;
-        let unsupported = |reason| MethodError::Unsupported {
-            method: NAME,
-            scene: scene.name.clone(),
-            reason,
-        };
-        let generator = caustic_generator(scene).map_err(unsupported)?;
-        let mesh = sources::for_shape(
-            &scene.objects[generator].shape,
-            &gpu_scene.meshes[generator],
-            &scene.lights[0],
-            params.grid,
-        )
-        .ok_or_else(|| {
-            unsupported(Unsupported(
-                "cannot build a wavefront for this refractor and light".into(),
-            ))
-        })?;
-        let trace_params = TraceParams {
-            specular_object: generator as u32,
-            light_index: 0,
-            source_count: mesh.sources.len() as u32,
-            triangle_count: (mesh.triangles.len() / 3) as u32,
-        };
-        let splat_params = SplatParams {
-            tolerance: params.tolerance as f32,
-            _pad: [0.0; 3],
-        };
-        let b = ctx.checked("wavefront setup", || {
-            Buffers::new(&ctx.device, &mesh, &trace_params, &splat_params)
-        })?;
-
-        // Pass 1: one light ray per wavefront vertex, through the generator to a receiver.
-        let shader = Shader::new(ctx, "wavefront trace.wgsl", pass_source(TRACE_WGSL))?;
-        let trace = ComputePass::builder(ctx, "wavefront/trace_vertices", &shader)
-            .frame(renderer)
-            .bind(
-                1,
-                &[
-                    ("tp", &b.trace_params),
-                    ("sources", &b.sources),
-                    ("traced", &b.traced),
-                ],
-            )
-            .kernels(&["trace_vertices"])
-            .build()?;
-
-        // Pass 2: keep the triangles whose vertices land on one side of one receiver.
-        let shader = Shader::new(ctx, "wavefront classify.wgsl", pass_source(CLASSIFY_WGSL))?;
-        let classify = ComputePass::builder(ctx, "wavefront/classify_triangles", &shader)
-            .frame(renderer)
-            .bind(
-                1,
-                &[
-                    ("tp", &b.trace_params),
-                    ("traced", &b.traced),
-                    ("triangles", &b.triangles),
-                    ("keep", &b.keep),
-                    ("counters", &b.counters),
-                ],
-            )
-            .kernels(&["classify_triangles"])
-            .build()?;
-
-        // Pass 3: the kept triangles drawn from the camera, brightness = old/new area.
-        // Folded triangles face away: both windings count (the builder culls nothing).
-        let shader = Shader::new(ctx, "wavefront splat.wgsl", pass_source(SPLAT_WGSL))?;
-        let splat = RasterPass::builder(ctx, "wavefront/splat", &shader, "vs_splat")
-            .frame(renderer)
-            .bind(
-                1,
-                &[
-                    ("sp", &b.splat_params),
-                    ("traced", &b.traced),
-                    ("triangles", &b.triangles),
-                    ("keep", &b.keep),
-                ],
-            )
-            .fragment("fs_splat", &[Some(additive_hdr_target())])
-            .counted()
-            .build()?;
-
+        let trace_params = init("wavefront trace params", bytemuck::bytes_of(trace), uniform);
+        let splat_params = init("wavefront splat params", bytemuck::bytes_of(splat), uniform);
+        let Lattice { sources, triangles } = lattice;
+        // One `Traced` (64 bytes) per source, one flag per triangle.
+        let traced = storage("wavefront traced vertices", trace.source_count as u64 * 64);
+        let keep = storage(
+            "wavefront keep flags",
+            trace.triangle_count.max(1) as u64 * 4,
+        );
+        let trace_group = groups.trace.bind(
+            device,
+            &[
+                ("tp", &trace_params),
+                ("sources", sources),
+                ("traced", &traced),
+                ("vertex_counts", groups.vertex_counts),
+            ],
+        )?;
+        let classify_group = groups.classify.bind(
+            device,
+            &[
+                ("tp", &trace_params),
+                ("traced", &traced),
+                ("triangles", triangles),
+                ("keep", &keep),
+                ("counters", groups.triangle_counts),
+            ],
+        )?;
+        let splat_group = groups.splat.bind(
+            device,
+            &[
+                ("sp", &splat_params),
+                ("traced", &traced),
+                ("triangles", triangles),
+                ("keep", &keep),
+            ],
+        )?;
+        let bytes = [&trace_params, &splat_params, &traced, &keep]
+            .iter()
+            .map(|b| b.size())
+            .sum();
         Ok(Self {
-            trace,
-            classify,
-            splat,
-            bytes: b.bytes(),
-            counters: b.counters,
-            counters_init: b.counters_init,
-            source_count: trace_params.source_count,
-            triangle_count: trace_params.triangle_count,
+            source_count: trace.source_count,
+            triangle_count: trace.triangle_count,
+            trace_group,
+            classify_group,
+            splat_group,
+            bytes,
         })
     }
 }
@@ -403,40 +515,70 @@ impl Wavefront {
 impl CausticsMethod for Wavefront {
     fn record(&mut self, frame: &mut Frame<'_>) -> Result<(), MethodError> {
         let renderer = frame.renderer;
+        let triangle_bytes = self.triangle_counts.size();
         frame.encoder.copy_buffer_to_buffer(
             &self.counters_init,
             0,
-            &self.counters,
+            &self.triangle_counts,
             0,
-            self.counters.size(),
+            triangle_bytes,
         );
-        self.trace
-            .begin(frame)?
-            .dispatch("trace_vertices", [self.source_count.div_ceil(64), 1, 1])?;
-        self.classify.begin(frame)?.dispatch(
-            "classify_triangles",
-            [self.triangle_count.div_ceil(64), 1, 1],
-        )?;
+        frame.encoder.copy_buffer_to_buffer(
+            &self.counters_init,
+            0,
+            &self.vertex_counts,
+            0,
+            self.vertex_counts.size(),
+        );
+        {
+            let mut pass = self.trace.begin(frame)?;
+            for sheet in &self.sheets {
+                pass.set_bind_group(1, &sheet.trace_group, &[]);
+                pass.dispatch("trace_vertices", [sheet.source_count.div_ceil(64), 1, 1])?;
+            }
+        }
+        {
+            let mut pass = self.classify.begin(frame)?;
+            for sheet in &self.sheets {
+                pass.set_bind_group(1, &sheet.classify_group, &[]);
+                pass.dispatch(
+                    "classify_triangles",
+                    [sheet.triangle_count.div_ceil(64), 1, 1],
+                )?;
+            }
+        }
         let attachments = [load_attachment(&renderer.targets().surface.view)];
         let mut pass = self.splat.begin(frame, &attachments, None)?;
-        pass.draw(0..3 * self.triangle_count, 0..1);
+        for sheet in &self.sheets {
+            pass.set_bind_group(1, &sheet.splat_group, &[]);
+            pass.draw(0..3 * sheet.triangle_count, 0..1);
+        }
         Ok(())
     }
 
     fn counters(&self, ctx: &GpuContext) -> Result<Counters, MethodError> {
-        let c = caustics_gpu::readback::read_buffer_u32(
-            ctx,
-            &self.counters,
-            self.counters.size(),
-            "wavefront counters",
-        )?;
+        let read = |buffer: &wgpu::Buffer, what| {
+            caustics_gpu::readback::read_buffer_u32(ctx, buffer, buffer.size(), what)
+        };
+        let triangles = read(&self.triangle_counts, "wavefront triangle counts")?;
+        let vertices = read(&self.vertex_counts, "wavefront vertex counts")?;
         let mut out = Counters::new();
-        out.insert("source_vertices".into(), self.source_count as u64);
-        out.insert("triangles".into(), self.triangle_count as u64);
-        out.insert("kept_triangles".into(), c[0] as u64);
-        out.insert("dropped_invalid_vertex".into(), c[1] as u64);
-        out.insert("dropped_receiver_mismatch".into(), c[2] as u64);
-        out.insert("dropped_face_mismatch".into(), c[3] as u64);
+        out.insert("sheets".into(), self.sheets.len() as u64);
+        out.insert(
+            "source_vertices".into(),
+            self.sheets.iter().map(|s| s.source_count as u64).sum(),
+        );
+        out.insert(
+            "triangles".into(),
+            self.sheets.iter().map(|s| s.triangle_count as u64).sum(),
+        );
+        out.insert("bvh_triangles".into(), self.bvh_triangles as u64);
+        for (name, value) in TRIANGLE_COUNTERS.iter().zip(&triangles) {
+            out.insert((*name).into(), *value as u64);
+        }
+        for (name, value) in VERTEX_COUNTERS.iter().zip(&vertices) {
+            out.insert((*name).into(), *value as u64);
+        }
         Ok(out)
     }
 
@@ -452,7 +594,7 @@ mod tests {
 
     #[test]
     fn shaders_validate() -> Result<(), String> {
-        shader::validate_wgsl("trace.wgsl", &pass_source(TRACE_WGSL))?;
+        shader::validate_wgsl("trace.wgsl", &trace_source())?;
         shader::validate_wgsl("classify.wgsl", &pass_source(CLASSIFY_WGSL))?;
         shader::validate_wgsl("splat.wgsl", &pass_source(SPLAT_WGSL))
     }
@@ -460,19 +602,21 @@ mod tests {
     #[test]
     fn gpu_structs_match_their_wgsl() {
         caustics_gpu::assert_wgsl_layout!(
-            pass_source(TRACE_WGSL),
+            trace_source(),
             Source {
                 origin,
                 dir_or_normal
             }
         );
         caustics_gpu::assert_wgsl_layout!(
-            pass_source(TRACE_WGSL),
+            trace_source(),
             TraceParams {
                 specular_object,
                 light_index,
                 source_count,
-                triangle_count
+                triangle_count,
+                bounces,
+                reflect_mask
             }
         );
         caustics_gpu::assert_wgsl_layout!(pass_source(SPLAT_WGSL), SplatParams { tolerance });
@@ -487,6 +631,7 @@ mod tests {
             (serde_json::json!({"tolerance": 0.0}), "tolerance"),
             (serde_json::json!({"tolerance": -1.0}), "tolerance"),
             (serde_json::json!({"tolerance": 1e308}), "tolerance"),
+            (serde_json::json!({"bounces": 9}), "bounces"),
             (serde_json::json!({"grd": 4}), "known parameters"),
         ] {
             let msg = parse::<WavefrontParams>(NAME, &json)
@@ -497,7 +642,7 @@ mod tests {
         use caustics_method::MethodParams;
         assert_eq!(
             serde_json::Value::Object(WavefrontParams::default().to_json()),
-            serde_json::json!({"grid": 512, "tolerance": 2e-3})
+            serde_json::json!({"grid": 512, "tolerance": 2e-3, "bounces": 0, "reflections": false})
         );
     }
 }

@@ -1,9 +1,32 @@
-// Pass 1 of wavefront (Wallace 2016): trace one light ray per wavefront vertex
-// through the caustic generator (a dielectric: one refraction at an open surface,
-// two through a closed sphere; a mirror: one reflection) to the first diffuse
-// receiver, and record where it started in the light's parametrization ("old": the
-// light plane for a directional light, the unit sphere of directions for a
-// point/spot light) and where it lands ("new").
+// Pass 1 of wavefront (Wallace 2016): trace one light ray per wavefront vertex from
+// its caustic generator through every specular surface it meets (refracted at each
+// dielectric interface, reflected off mirrors) to the first diffuse receiver, and
+// record where it started in the light's parametrization ("old": the light plane for
+// a directional light, the unit sphere of directions for a point/spot light), where it
+// lands ("new") and which specular path it took (a triangle whose vertices took
+// different paths spans no continuous wavefront and is dropped by classify.wgsl).
+//
+// Wallace refracts once, at the water. The same construction carries a wavefront
+// through a chain of generators (a glass sphere over water, two lenses): each
+// interface maps the wavefront's rays on, and the area ratio at the receiver is then
+// that of the whole chain. Surfaces are found by `scene_closest_hit`: analytic objects
+// exactly, meshes and heightfields through the scene's triangle BVH with interpolated
+// (shading) normals. Light transport with shading normals is not symmetric: each
+// event multiplies the flux by |ωi·ns|·|ωo·ng| / (|ωo·ns|·|ωi·ng|) (Veach 1997,
+// §5.3), as the reference's photons do, and a ray for which ns and ng disagree about
+// a side is dropped.
+//
+// By default a path passes each specular object once (in, through, out, on to the
+// next), transmitted at every dielectric interface with weight 1 − F, as Wallace's
+// one refraction is: total internal reflection and a second hit on an object already
+// left end it. The other paths are further sheets, each one fixed choice per
+// interface so that every sheet is one smooth wavefront: `reflect_mask` bit k takes
+// the Fresnel reflection (weight F, 1 under total internal reflection) at the path's
+// k-th dielectric interface instead (bit 0: the reflection off the generator; bits
+// 1..j: j internal reflections before the light leaves). A vertex that lands before
+// using all its sheet's reflections belongs to another sheet and is dropped here, so
+// the sheets partition the light. `bounces` allows that many hits on objects a path
+// has already left (the ring's opposite wall).
 
 struct Source {
     // xyz: a point on the specular surface (SOURCE_SURFACE) or a ray origin (SOURCE_RAY); w: kind.
@@ -15,39 +38,39 @@ struct Source {
 const SOURCE_SURFACE: f32 = 0.0;
 const SOURCE_RAY: f32 = 1.0;
 
+// Why a vertex is invalid (Traced.info.y), and the index of its counter.
 const INVALID_NONE: u32 = 0u;
-const INVALID_MISSED_SPECULAR: u32 = 1u;
+// The ray's first surface is not this wavefront's generator (another generator's
+// wavefront, or direct light).
+const INVALID_MISSED_GENERATOR: u32 = 1u;
 const INVALID_SHADOWED: u32 = 2u;
 const INVALID_TIR: u32 = 3u;
 const INVALID_NO_RECEIVER: u32 = 4u;
-// The ray meets a specular surface again (e.g. a second bounce inside a ring):
-// wavefront follows one specular event.
-const INVALID_SPECULAR_RECEIVER: u32 = 5u;
+// The ray meets an object it has already left (the ring's opposite wall) with no
+// bounce left.
+const INVALID_REHIT: u32 = 5u;
+// Shading and geometric normal disagree about the side of ωi or ωo.
+const INVALID_WRONG_SIDE: u32 = 6u;
+// More than MAX_EVENTS specular events.
+const INVALID_TOO_MANY_EVENTS: u32 = 7u;
+// Landed without taking every reflection its sheet asks for (another sheet's path).
+const INVALID_OTHER_SHEET: u32 = 8u;
+
+// Specular events one path may have (interfaces and reflections).
+const MAX_EVENTS: u32 = 16u;
+// Objects one path may leave before it must land (its re-hit memory).
+const MAX_LEFT: u32 = 8u;
 
 @group(1) @binding(0) var<uniform> tp: TraceParams;
 @group(1) @binding(1) var<storage, read> sources: array<Source>;
 @group(1) @binding(2) var<storage, read_write> traced: array<Traced>;
+@group(1) @binding(3) var<storage, read_write> vertex_counts: VertexCounts;
 
-struct SceneHit {
-    t: f32,
-    object: u32,
-}
-
-// Closest analytic object along a ray, skipping `skip` (NONE: skip nothing).
-// Heightfields and meshes are not intersected: `wavefront` declares scenes with them
-// as receivers unsupported.
-fn closest_analytic_hit(o: vec3<f32>, d: vec3<f32>, t_min: f32, skip: u32) -> SceneHit {
-    var best = SceneHit(NO_HIT, NONE);
-    for (var i = 0u; i < frame.counts.x; i++) {
-        if i == skip {
-            continue;
-        }
-        let t = intersect_analytic(o, d, objects[i], t_min);
-        if t < best.t {
-            best = SceneHit(t, i);
-        }
-    }
-    return best;
+// Vertices per outcome (INVALID_* index; INVALID_NONE = landed), and landed vertices
+// whose path used a further bounce. Read back as `VERTEX_COUNTERS` in lib.rs.
+struct VertexCounts {
+    reasons: array<atomic<u32>, 9>,
+    bounced: atomic<u32>,
 }
 
 fn invalid(why: u32) -> Traced {
@@ -56,13 +79,15 @@ fn invalid(why: u32) -> Traced {
     return v;
 }
 
-// Refracts `d` at a surface with outward normal `n_out` of a dielectric with index
-// `ior` (outside 1.0). Returns the new direction (xyz) and the Fresnel transmittance
-// (w), or w < 0 under total internal reflection.
-fn refract_through(d: vec3<f32>, n_out: vec3<f32>, ior: f32) -> vec4<f32> {
-    let entering = dot(d, n_out) < 0.0;
-    let n = select(-n_out, n_out, entering);
-    let eta = select(ior, 1.0 / ior, entering);
+fn count_vertex(why: u32) {
+    atomicAdd(&vertex_counts.reasons[why], 1u);
+}
+
+// Refracts `d` at a surface with shading normal `n` facing the incoming light
+// (dot(d, n) < 0), eta = index on the light's side / index beyond. Returns the new
+// direction (xyz) and the Fresnel transmittance (w), or w < 0 under total internal
+// reflection.
+fn refract_facing(d: vec3<f32>, n: vec3<f32>, eta: f32) -> vec4<f32> {
     let cos_i = -dot(d, n);
     let f = fresnel_dielectric(cos_i, eta);
     let t = refract(d, n, eta);
@@ -70,6 +95,27 @@ fn refract_through(d: vec3<f32>, n_out: vec3<f32>, ior: f32) -> vec4<f32> {
         return vec4<f32>(0.0, 0.0, 0.0, -1.0);
     }
     return vec4<f32>(normalize(t), 1.0 - f);
+}
+
+// The adjoint shading-normal factor of one event (wi towards the light, wo onward), or
+// a negative value when ns and ng disagree about the side of either direction.
+fn shading_factor(wi: vec3<f32>, wo: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>) -> f32 {
+    let i_s = dot(wi, ns);
+    let i_g = dot(wi, ng);
+    let o_s = dot(wo, ns);
+    let o_g = dot(wo, ng);
+    if !(i_s * i_g > 0.0 && o_s * o_g > 0.0) {
+        return -1.0;
+    }
+    return abs(i_s * o_g / (o_s * i_g));
+}
+
+// Order-dependent hash of the specular events so far: object, and which side of it the
+// light arrived on (outside 0, inside 1).
+fn mix_path(h: u32, object: u32, inside: u32) -> u32 {
+    var x = h ^ (object * 2u + inside + 1u) * 0x9e3779b9u;
+    x = (x ^ (x >> 16u)) * 0x85ebca6bu;
+    return x ^ (x >> 13u);
 }
 
 @compute @workgroup_size(64)
@@ -80,41 +126,54 @@ fn trace_vertices(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     let src = sources[i];
     let light = lights[tp.light_index];
-    let obj = objects[tp.specular_object];
-    let mat = materials[obj.material];
+    let generator = tp.specular_object;
     let eps = 1e-4;
 
-    // Hit point on the generator and the light direction there.
+    // The first hit, on the generator, and the light's direction there.
     var p: vec3<f32>;
-    var n_out: vec3<f32>;
+    var ns: vec3<f32>;
+    var ng: vec3<f32>;
     var d: vec3<f32>;
+    var light_dist = NO_HIT;
     if src.origin.w == SOURCE_RAY {
         d = src.dir_or_normal.xyz;
-        let t = intersect_analytic(src.origin.xyz, d, obj, 0.0);
-        if t >= NO_HIT {
-            traced[i] = invalid(INVALID_MISSED_SPECULAR);
+        let first = scene_closest_hit(src.origin.xyz, d, 0.0, NONE);
+        if first.object != generator {
+            traced[i] = invalid(INVALID_MISSED_GENERATOR);
+            count_vertex(INVALID_MISSED_GENERATOR);
             return;
         }
-        p = src.origin.xyz + t * d;
-        n_out = analytic_normal(obj, p);
+        p = src.origin.xyz + first.t * d;
+        ns = first.ns;
+        ng = first.ng;
+        // A directional light's lattice starts on a plane past the generator's bounds:
+        // anything behind that plane shadows the ray.
+        if light.kind == LIGHT_DIRECTIONAL && scene_closest_hit(src.origin.xyz, -d, 0.0, NONE).object != NONE {
+            traced[i] = invalid(INVALID_SHADOWED);
+            count_vertex(INVALID_SHADOWED);
+            return;
+        }
     } else {
         p = src.origin.xyz;
-        n_out = src.dir_or_normal.xyz;
+        ns = src.dir_or_normal.xyz;
+        ng = ns;
         if light.kind == LIGHT_DIRECTIONAL {
             d = light.direction.xyz;
         } else {
             d = normalize(p - light.position.xyz);
+            light_dist = length(p - light.position.xyz);
+        }
+        // Is the vertex lit? (walls or other objects between the light and the surface)
+        if scene_closest_hit(p, -d, eps, generator).t < light_dist - eps {
+            traced[i] = invalid(INVALID_SHADOWED);
+            count_vertex(INVALID_SHADOWED);
+            return;
         }
     }
-    // Which face of the generator the light meets (0 outside, 1 inside): a
-    // triangle whose vertices meet different faces (outer and inner wall of a ring)
-    // spans no continuous wavefront.
-    let face = select(0u, 1u, dot(d, n_out) > 0.0);
 
     // Light-space coordinate and the flux density the vertex carries.
     var old_pos: vec3<f32>;
     var flux: vec3<f32>;
-    var light_dist = NO_HIT;
     if light.kind == LIGHT_DIRECTIONAL {
         let l = light.direction.xyz;
         old_pos = p - dot(p, l) * l;
@@ -122,64 +181,129 @@ fn trace_vertices(@builtin(global_invocation_id) gid: vec3<u32>) {
     } else {
         old_pos = d;
         flux = light_intensity(light, d);
-        light_dist = length(p - light.position.xyz);
     }
 
-    // Is the hit point lit? (walls or other objects between light and surface)
-    let shadow = closest_analytic_hit(p, -d, eps, tp.specular_object);
-    if shadow.t < light_dist - eps {
-        traced[i] = invalid(INVALID_SHADOWED);
-        return;
-    }
-
-    if mat.kind == MAT_MIRROR {
-        // DESIGN: mirrors reflect with their reflectance at every angle, both sides.
-        flux *= mat.color.xyz;
-        d = reflect(d, n_out);
-    } else {
-        let r1 = refract_through(d, n_out, mat.ior);
-        if r1.w < 0.0 {
-            traced[i] = invalid(INVALID_TIR);
+    var object = generator;
+    var path = 0u;
+    var rehits_left = tp.bounces;
+    // The dielectric the ray is in (NONE: outside every object), and the objects it
+    // has left, for the re-hit rule.
+    var inside = NONE;
+    var left: array<u32, MAX_LEFT>;
+    var left_count = 0u;
+    var bounced = false;
+    // Dielectric interfaces met so far (the bit of `reflect_mask` the next one reads).
+    var interfaces_met = 0u;
+    for (var event = 0u; event < MAX_EVENTS; event++) {
+        let mat = materials[objects[object].material];
+        let wi = -d;
+        if dot(wi, ns) * dot(wi, ng) <= 0.0 {
+            traced[i] = invalid(INVALID_WRONG_SIDE);
+            count_vertex(INVALID_WRONG_SIDE);
             return;
         }
-        flux *= r1.w;
-        d = r1.xyz;
-        // Closed refractor: leave it through the second interface.
-        if obj.kind == OBJ_SPHERE {
-            let t = intersect_sphere(p, d, obj.p0.xyz, obj.p0.w, eps);
-            if t >= NO_HIT {
-                traced[i] = invalid(INVALID_MISSED_SPECULAR);
-                return;
+        let arrives_inside = dot(d, ng) > 0.0;
+        path = mix_path(path, object, select(0u, 1u, arrives_inside));
+        var wo: vec3<f32>;
+        if mat.kind == MAT_MIRROR {
+            // DESIGN: mirrors reflect with their reflectance at every angle, both sides.
+            flux *= mat.color.xyz;
+            wo = reflect(d, ns);
+            if left_count < MAX_LEFT {
+                left[left_count] = object;
+                left_count++;
             }
-            p = p + t * d;
-            let r2 = refract_through(d, analytic_normal(obj, p), mat.ior);
-            if r2.w < 0.0 {
+        } else {
+            // The shading normal on the side the light comes from.
+            let n = select(ns, -ns, arrives_inside);
+            let eta = select(1.0 / mat.ior, mat.ior, arrives_inside);
+            let r = refract_facing(d, n, eta);
+            let take_reflection = ((tp.reflect_mask >> interfaces_met) & 1u) == 1u;
+            interfaces_met++;
+            if take_reflection {
+                // Fresnel reflection: F, or all of it under total internal reflection.
+                flux *= select(1.0 - r.w, 1.0, r.w < 0.0);
+                wo = reflect(d, n);
+                if !arrives_inside && left_count < MAX_LEFT {
+                    left[left_count] = object;
+                    left_count++;
+                }
+            } else if r.w < 0.0 {
                 traced[i] = invalid(INVALID_TIR);
+                count_vertex(INVALID_TIR);
+                return;
+            } else {
+                flux *= r.w;
+                wo = r.xyz;
+                if arrives_inside {
+                    inside = NONE;
+                    if left_count < MAX_LEFT {
+                        left[left_count] = object;
+                        left_count++;
+                    }
+                } else {
+                    inside = object;
+                }
+            }
+        }
+        let k = shading_factor(wi, wo, ns, ng);
+        if k < 0.0 {
+            traced[i] = invalid(INVALID_WRONG_SIDE);
+            count_vertex(INVALID_WRONG_SIDE);
+            return;
+        }
+        flux *= k;
+        d = wo;
+
+        // The next surface along the ray.
+        let hit = scene_closest_hit(p, d, eps, NONE);
+        if hit.object == NONE {
+            traced[i] = invalid(INVALID_NO_RECEIVER);
+            count_vertex(INVALID_NO_RECEIVER);
+            return;
+        }
+        let q = p + hit.t * d;
+        if materials[objects[hit.object].material].kind == MAT_DIFFUSE {
+            if (tp.reflect_mask >> interfaces_met) != 0u {
+                traced[i] = invalid(INVALID_OTHER_SHEET);
+                count_vertex(INVALID_OTHER_SHEET);
                 return;
             }
-            flux *= r2.w;
-            d = r2.xyz;
+            var v: Traced;
+            let side = select(1.0, -1.0, dot(d, hit.ns) > 0.0);
+            v.old_pos = vec4<f32>(old_pos, 0.0);
+            v.new_pos = vec4<f32>(q, side);
+            v.flux = vec4<f32>(flux, 0.0);
+            v.info = vec4<u32>(hit.object, INVALID_NONE, path, 0u);
+            traced[i] = v;
+            count_vertex(INVALID_NONE);
+            if bounced {
+                atomicAdd(&vertex_counts.bounced, 1u);
+            }
+            return;
         }
+        // A specular surface: the exit of the object the ray is in, the next object of
+        // a chain, or one already left (a further bounce).
+        if hit.object != inside {
+            var seen = false;
+            for (var j = 0u; j < left_count; j++) {
+                seen = seen || left[j] == hit.object;
+            }
+            if seen {
+                if rehits_left == 0u {
+                    traced[i] = invalid(INVALID_REHIT);
+                    count_vertex(INVALID_REHIT);
+                    return;
+                }
+                rehits_left--;
+                bounced = true;
+            }
+        }
+        p = q;
+        ns = hit.ns;
+        ng = hit.ng;
+        object = hit.object;
     }
-
-    // First surface along the outgoing ray, the generator included (a second
-    // specular event invalidates the vertex).
-    let hit = closest_analytic_hit(p, d, eps, NONE);
-    if hit.object == NONE {
-        traced[i] = invalid(INVALID_NO_RECEIVER);
-        return;
-    }
-    let receiver = objects[hit.object];
-    if materials[receiver.material].kind != MAT_DIFFUSE {
-        traced[i] = invalid(INVALID_SPECULAR_RECEIVER);
-        return;
-    }
-    let q = p + hit.t * d;
-    let side = select(1.0, -1.0, dot(d, analytic_normal(receiver, q)) > 0.0);
-    var v: Traced;
-    v.old_pos = vec4<f32>(old_pos, 0.0);
-    v.new_pos = vec4<f32>(q, side);
-    v.flux = vec4<f32>(flux, 0.0);
-    v.info = vec4<u32>(hit.object, INVALID_NONE, face, 0u);
-    traced[i] = v;
+    traced[i] = invalid(INVALID_TOO_MANY_EVENTS);
+    count_vertex(INVALID_TOO_MANY_EVENTS);
 }

@@ -9,7 +9,7 @@ struct Traced {
     // rgb: flux density carried (W per m² of light plane, or W per sr): emitted × Fresnel transmittances.
     flux: vec4<f32>,
     // x: receiver object (NONE if the vertex is invalid), y: why invalid (0 valid),
-    // z: face of the generator the light met (0 outside, 1 inside).
+    // z: hash of the specular path (each event's object and side).
     info: vec4<u32>,
 }
 
@@ -18,4 +18,10 @@ struct TraceParams {
     light_index: u32,
     source_count: u32,
     triangle_count: u32,
+    // Hits a path may make on objects it has already left.
+    bounces: u32,
+    // Bit k: take the reflection at the path's k-th dielectric interface (this sheet).
+    reflect_mask: u32,
+    pad0: u32,
+    pad1: u32,
 }
