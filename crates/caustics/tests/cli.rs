@@ -138,7 +138,7 @@ fn unsupported_scene_is_skipped_with_reason_and_exit_code_3() {
     let o = caustics(&[
         "run",
         "--scene",
-        "bumpy_glass",
+        "fog_sphere",
         "--method",
         "wavefront",
         "--out",
@@ -146,7 +146,7 @@ fn unsupported_scene_is_skipped_with_reason_and_exit_code_3() {
     ]);
     assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
     assert!(
-        stderr(&o).contains("skipped") && stderr(&o).contains("mesh"),
+        stderr(&o).contains("skipped") && stderr(&o).contains("medium"),
         "{}",
         stderr(&o)
     );

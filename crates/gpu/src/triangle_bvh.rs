@@ -190,20 +190,9 @@ impl FlatBvh {
                 continue;
             }
             for tri in &self.triangles[n.first as usize..(n.first + n.count) as usize] {
-                let p0 = Vec3::from_slice(&tri.p0[..3]);
-                let e1 = Vec3::from_slice(&tri.p1[..3]) - p0;
-                let e2 = Vec3::from_slice(&tri.p2[..3]) - p0;
-                let p = d.cross(e2);
-                let det = e1.dot(p);
-                if det.abs() < 1e-12 {
-                    continue;
-                }
-                let s = o - p0;
-                let u = s.dot(p) / det;
-                let q = s.cross(e1);
-                let v = d.dot(q) / det;
-                let t = e2.dot(q) / det;
-                if u >= 0.0 && v >= 0.0 && u + v <= 1.0 && t > t_min && t < t_best {
+                let corner = |p: &[f32; 4]| Vec3::from_slice(&p[..3]);
+                let abc = [corner(&tri.p0), corner(&tri.p1), corner(&tri.p2)];
+                if let Some(t) = ray_triangle(o, d, abc).filter(|&t| t > t_min && t < t_best) {
                     t_best = t;
                     best = Some((t, tri.p0[3] as u32));
                 }
@@ -211,6 +200,22 @@ impl FlatBvh {
         }
         best
     }
+}
+
+/// Möller–Trumbore, both sides, as `bvh_closest_hit` tests a triangle: the ray
+/// parameter t of `o + t·d` through triangle `abc`, or `None` (parallel or outside).
+pub fn ray_triangle(o: glam::Vec3, d: glam::Vec3, [a, b, c]: [glam::Vec3; 3]) -> Option<f32> {
+    let (e1, e2) = (b - a, c - a);
+    let p = d.cross(e2);
+    let det = e1.dot(p);
+    if det.abs() < 1e-12 {
+        return None;
+    }
+    let s = o - a;
+    let u = s.dot(p) / det;
+    let q = s.cross(e1);
+    let v = d.dot(q) / det;
+    (u >= 0.0 && v >= 0.0 && u + v <= 1.0).then(|| e2.dot(q) / det)
 }
 
 fn tree_depth(nodes: &[BvhNode]) -> u32 {
@@ -318,21 +323,8 @@ mod tests {
                 continue;
             }
             for t in 0..mesh.triangle_count() {
-                let [a, b, c] = mesh.triangle(t);
-                let (e1, e2) = (b - a, c - a);
-                let p = d.cross(e2);
-                let det = e1.dot(p);
-                if det.abs() < 1e-12 {
-                    continue;
-                }
-                let s = o - a;
-                let (u, q) = (s.dot(p) / det, s.cross(e1));
-                let (v, t) = (d.dot(q) / det, e2.dot(q) / det);
-                if u >= 0.0
-                    && v >= 0.0
-                    && u + v <= 1.0
-                    && t > 1e-4
-                    && best.is_none_or(|(bt, _)| t < bt)
+                if let Some(t) = ray_triangle(o, d, mesh.triangle(t))
+                    .filter(|&t| t > 1e-4 && best.is_none_or(|(bt, _)| t < bt))
                 {
                     best = Some((t, object as u32));
                 }

@@ -124,17 +124,9 @@ fn cpu_closest(scene: &GpuScene, o: Vec3, d: Vec3, skip: Option<u32>) -> Option<
             continue;
         }
         for k in 0..mesh.triangle_count() {
-            let [a, b, c] = mesh.triangle(k);
-            let (e1, e2) = (b - a, c - a);
-            let p = d.cross(e2);
-            let det = e1.dot(p);
-            if det.abs() < 1e-12 {
-                continue;
-            }
-            let s = o - a;
-            let (u, q) = (s.dot(p) / det, s.cross(e1));
-            let (v, t) = (d.dot(q) / det, e2.dot(q) / det);
-            if u >= 0.0 && v >= 0.0 && u + v <= 1.0 && t > 1e-4 && best.is_none_or(|b| t < b.0) {
+            if let Some(t) = triangle_bvh::ray_triangle(o, d, mesh.triangle(k))
+                .filter(|&t| t > 1e-4 && best.is_none_or(|b| t < b.0))
+            {
                 best = Some((t, object as u32));
             }
         }
