@@ -2,30 +2,39 @@
 //!
 //! The light is a wavefront mesh: each vertex is a light ray, each triangle the bundle
 //! of rays between its vertices. The rays are traced through the refractor to the
-//! receivers (`trace.wgsl`), triangles that stay on one receiver are flagged
-//! (`classify.wgsl`; flags, not a compacted list, so that the draw order and with it
-//! the additive blend are the same every frame: the image is deterministic), and the
-//! refracted mesh is drawn from the camera with brightness = flux density × (area before)/(area after), the two areas taken from screen-space
-//! derivatives of the old and new positions (`splat.wgsl`). Flux density is the
-//! light's irradiance per unit area of the plane perpendicular to a directional
-//! light (or its intensity per steradian for a point/spot light) times the Fresnel
-//! transmittance of each interface, so the result is absolute radiance
-//! ρ/π · E in DESIGN units. For flat water it is exactly ρ/π · T(θ) · E · cos θ.
+//! receivers (`trace.wgsl`), triangles that stay on one path to one receiver are
+//! flagged (`classify.wgsl`; flags, not a compacted list, so that the draw order and
+//! with it the additive blend are the same every frame: the image is deterministic),
+//! and the refracted mesh is drawn from the camera with brightness = flux density ×
+//! (area before)/(area after), the two areas taken from screen-space derivatives of
+//! the old and new positions (`splat.wgsl`). Flux density is the light's irradiance
+//! per unit area of the plane perpendicular to a directional light (or its intensity
+//! per steradian for a point/spot light) times the Fresnel factor of each interface
+//! and the reflectance of each mirror, so the result is absolute radiance ρ/π · E in
+//! DESIGN units. For flat water it is exactly ρ/π · T(θ) · E · cos θ.
 //!
-//! Every specular object under every light is one wavefront (a *sheet*; the sheets add
-//! up). A sheet's vertices start on the generator (the water mesh itself for a
-//! heightfield, else a lattice of light rays over its bounding sphere) and are traced
-//! through every specular surface they meet, a chain of generators included (a glass
-//! sphere over water, two lenses): analytic shapes exactly, meshes and heightfields
-//! through the scene's triangle BVH (`caustics_gpu::triangle_bvh`) with interpolated
-//! normals and the adjoint shading-normal factor the reference applies. Receivers may
-//! be any diffuse object the camera G-buffer shows. By default a path passes each
-//! specular object once, as Wallace's single refraction does: total internal
-//! reflection and a second hit on an object already left end it. `bounces` follows up
-//! to that many such further events; each different path is its own part of the
-//! wavefront (classify.wgsl keeps triangles whose vertices took one path). Like the
-//! original, it ignores the light reflected at dielectric interfaces and
-//! point-samples triangles thinner than a pixel (noisy cusps); it renders no media.
+//! One wavefront per light and specular object: its vertices start on the generator
+//! (the water mesh itself for a heightfield, else a lattice of light rays over its
+//! bounding sphere) and are traced through every specular surface they meet, a chain
+//! of generators included (a glass sphere over water, two lenses): analytic shapes
+//! exactly, meshes and heightfields through the scene's triangle BVH
+//! (`caustics_gpu::triangle_bvh`) with interpolated normals and the adjoint
+//! shading-normal factor the reference applies. A ray whose first surface is another
+//! generator belongs to that one's wavefront. Receivers may be any diffuse object the
+//! camera G-buffer shows; classify.wgsl keeps the triangles whose vertices took one
+//! path to one receiver.
+//!
+//! By default a path passes each specular object once and is transmitted at every
+//! dielectric interface, as Wallace's single refraction is: the light reflected at an
+//! interface is ignored, and total internal reflection or a second hit on an object
+//! already left ends a path. The complete light paths are further *sheets* of the
+//! wavefront, each one fixed choice (transmit or reflect) per interface so that each is
+//! one smooth wavefront, and together a partition of the light: `bounces` adds the
+//! light reflected 1..=bounces times inside a closed refractor before it leaves (and
+//! allows as many hits on an object already left, a mirror's opposite wall),
+//! `reflections` the Fresnel reflection off each dielectric generator. Like the
+//! original it point-samples triangles thinner than a pixel (noisy cusps), and it
+//! renders no media.
 
 mod sources;
 
