@@ -99,7 +99,7 @@ impl<'a> Frame<'a> {
         self.mode == FrameMode::Count
     }
 
-    /// Opens a named, profiled render pass. `name` is "<owner>/<pass>", e.g.
+    /// Opens a named, profiled render pass. `name` is `"<owner>/<pass>"`, e.g.
     /// "wavefront/splat". The descriptor's `timestamp_writes` is set here.
     pub fn render_pass(
         &mut self,

@@ -683,7 +683,7 @@ pub struct ComputeSpec<'a> {
 pub type ComputePassBuilder<'a> = PassBuilder<'a, ComputeSpec<'a>>;
 
 impl ComputePass {
-    /// Starts declaring a compute pass named `name` ("<owner>/<pass>") on `shader`.
+    /// Starts declaring a compute pass named `name` (`"<owner>/<pass>"`) on `shader`.
     pub fn builder<'a>(
         ctx: &'a GpuContext,
         name: &str,

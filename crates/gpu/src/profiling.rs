@@ -56,7 +56,7 @@ pub struct PassStatistics {
 /// One pass of one measured frame.
 #[derive(Clone, Debug)]
 pub struct PassSample {
-    /// Pass name, "<owner>/<pass>".
+    /// Pass name, `"<owner>/<pass>"`.
     pub name: String,
     /// GPU time (ms) from the pass's timestamps; `None` when the adapter has no
     /// timestamps, or the sample was rejected (zero or non-monotonic timestamps).
