@@ -631,6 +631,39 @@ mod tests {
         caustics_gpu::assert_wgsl_layout!(pass_source(SPLAT_WGSL), SplatParams { tolerance });
     }
 
+    /// The sheets of a generator: transmitted light first, then j internal reflections
+    /// (bits 1..=j of the interfaces a path meets), then the outside reflection (bit
+    /// 0); mirrors have no interface to choose at, open refractors no inside to
+    /// reflect in.
+    #[test]
+    fn sheet_masks_follow_bounces_and_reflections() {
+        let params = |bounces, reflections| WavefrontParams {
+            bounces,
+            reflections,
+            ..WavefrontParams::default()
+        };
+        let glass = Material::Dielectric { ior: 1.5 };
+        let sphere = Shape::Sphere {
+            center: caustics_scene::Vec3::ZERO,
+            radius: 1.0,
+        };
+        let quad = Shape::Quad {
+            center: caustics_scene::Vec3::ZERO,
+            normal: caustics_scene::Vec3::Y,
+            size: caustics_scene::Vec2::ONE,
+        };
+        assert_eq!(sheet_masks(&sphere, &glass, &params(0, false)), [0]);
+        assert_eq!(
+            sheet_masks(&sphere, &glass, &params(3, true)),
+            [0, 0b10, 0b110, 0b1110, 0b1]
+        );
+        assert_eq!(sheet_masks(&quad, &glass, &params(3, true)), [0, 0b1]);
+        let mirror = Material::Mirror {
+            reflectance: caustics_scene::Vec3::ONE,
+        };
+        assert_eq!(sheet_masks(&sphere, &mirror, &params(3, true)), [0]);
+    }
+
     #[test]
     fn bad_params_are_errors_naming_the_parameter() {
         for (json, needle) in [
