@@ -21,6 +21,23 @@ pub enum HullKind {
 
 caustics_method::param_enum!(HullKind, [HullKind::Prism, HullKind::Tight]);
 
+/// How a corner's light path finds its surfaces after the light G-buffer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Tracer {
+    /// The paper's (Sect. 6): the first hit from the light G-buffer, exits, further
+    /// generators and the receivers from distance impostors (Szirmay-Kalos et al.
+    /// 2005), which misplace points and normals on surfaces that are not star-shaped
+    /// around the impostor's centre (bumps, concave meshes).
+    Impostor,
+    /// Exact: every hit, the first included, from the scene's triangle BVH and the
+    /// analytic shapes (`caustics_gpu::triangle_bvh`), with the adjoint shading-normal
+    /// factor at each surface event (Veach 1997, §5.3), as the reference traces.
+    Bvh,
+}
+
+caustics_method::param_enum!(Tracer, [Tracer::Impostor, Tracer::Bvh]);
+
 /// Most refinement levels (the control buffer counts beams of levels 0..=4).
 pub const MAX_LEVELS: u32 = 4;
 
@@ -48,6 +65,8 @@ method_params! {
         reflections: bool = true;
         /// further specular events beyond the paper's path (two refractions, Sect. 6): internal reflections in a closed refractor (Fresnel and total; each count a beam family of its own), total internal reflection elsewhere, a generator met again (a ring's opposite wall, a concave mesh) (paper: 0; bound: one beam family and counter per internal reflection, each traced for every leaf)
         bounces: u32 = 0 => closed(0.0, MAX_BOUNCES as f64);
+        /// how corner paths find their surfaces: impostor (distance impostors, the paper's Sect. 6) or bvh (exact: the scene's triangle BVH and analytic shapes, with the adjoint shading-normal factor; the light G-buffer and impostors are then not rendered)
+        tracer: Tracer = Tracer::Impostor;
         /// sigma (px) of the low-pass filter on the surface caustic (Sect. 7), 0 = off (bound: a (4 sigma + 1)^2 gather per pixel)
         surface_filter_px: f64 = 1.0 => closed(0.0, 16.0);
         /// soft-particle fade of volume caustics near surfaces (m), 0 = off (segments are clipped exactly; bound: longer than any scene)

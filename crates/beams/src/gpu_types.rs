@@ -7,7 +7,7 @@ use caustics_gpu::impostor::ImpostorAtlas;
 use caustics_gpu::{GpuScene, LightView};
 use caustics_scene::{Light, Material, Scene, Shape, Vec3};
 
-use crate::{BeamConfig, HullKind, MAX_SPECULAR};
+use crate::{BeamConfig, HullKind, MAX_SPECULAR, Tracer};
 
 /// Bytes of one `Candidate` (types.wgsl).
 pub(crate) const CANDIDATE_BYTES: u64 = 32;
@@ -56,7 +56,8 @@ pub(crate) struct BeamUniforms {
     scene_reach: f32,
     split_hit_px: f32,
     bounces: u32,
-    _pad: [u32; 2],
+    exact_trace: u32,
+    _pad: u32,
 }
 
 /// Mirrors `FilterUniforms` in filter.wgsl.
@@ -263,7 +264,8 @@ impl BeamUniforms {
             scene_reach: 2.0 * bounds.bounding_sphere_radius().max(1e-3),
             split_hit_px: r.split_hit_px as f32,
             bounces: b.bounces,
-            _pad: [0; 2],
+            exact_trace: u32::from(b.tracer == Tracer::Bvh),
+            _pad: 0,
         }
     }
 }
@@ -316,6 +318,7 @@ mod tests {
                 scene_reach,
                 split_hit_px,
                 bounces,
+                exact_trace,
             }
         );
         assert_wgsl_layout!(

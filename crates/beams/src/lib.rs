@@ -51,6 +51,13 @@
 //!   generator met again. Counters `beams_path_main`, `beams_path_fresnel_reflection`,
 //!   `beams_path_internal_<j>`, `beams_path_rehit` and `beams_path_tir` say what each
 //!   kind delivered.
+//! - the paper traces every hit after the first through distance impostors, which
+//!   misplace points and normals on surfaces that are not star-shaped around the
+//!   impostor's centre (bumps, concave meshes). `tracer` = bvh traces every corner
+//!   path exactly instead, the first hit included: the scene's triangle BVH and the
+//!   analytic shapes (`caustics_gpu::triangle_bvh`), with the adjoint shading-normal
+//!   factor at each event (Veach 1997, §5.3) as the reference; the light G-buffer and
+//!   impostor passes are then not recorded.
 
 //!
 //! Passes (names `<method>/<pass>`): `light_gbuffer`, `impostors`, `generate` (compute:
@@ -70,7 +77,7 @@ use caustics_gpu::{Frame, GBuffer, GpuContext, LightView, Renderer, shader};
 use caustics_method::{Capabilities, CausticsMethod, Counters, MethodError, Unsupported};
 use caustics_scene::{Scene, Vec3};
 
-pub use config::{BeamConfig, BeamParams, HullKind, MAX_BOUNCES, MAX_LEVELS, Refinement};
+pub use config::{BeamConfig, BeamParams, HullKind, MAX_BOUNCES, MAX_LEVELS, Refinement, Tracer};
 use control::CONTROL_WORDS;
 pub use gpu_types::BeamRecord;
 use gpu_types::{BEAM_BYTES, BeamUniforms, CANDIDATE_BYTES, FilterUniforms, Slot};
@@ -88,12 +95,16 @@ fn types_wgsl() -> String {
     )
 }
 
-/// Beam generation: types, impostor tracing, light paths, the control words, the
-/// refinement kernels.
+/// Group of the generate pass that holds the scene's triangle BVH (exact tracing).
+const BVH_GROUP: u32 = 3;
+
+/// Beam generation: types, impostor tracing, the scene's BVH, light paths, the control
+/// words, the refinement kernels.
 pub fn generate_source() -> String {
     shader::compose_method(&format!(
-        "{}\n{IMPOSTOR_TRACE_WGSL}\n{PATH_WGSL}\n{}\n{GENERATE_WGSL}",
+        "{}\n{IMPOSTOR_TRACE_WGSL}\n{}\n{PATH_WGSL}\n{}\n{GENERATE_WGSL}",
         types_wgsl(),
+        caustics_gpu::triangle_bvh::wgsl(BVH_GROUP),
         control::wgsl()
     ))
 }
@@ -337,6 +348,8 @@ impl BeamMethod {
         let uniforms = BeamUniforms::new(scene, config, view, slots, &atlas);
         let b = Buffers::new(device, &scene.camera, config, &uniforms);
 
+        // Built (once per scene) also for the impostor tracer: the pass binds it either way.
+        let bvh = renderer.scene().triangle_bvh(ctx)?;
         let shader = Shader::new(ctx, "beams generate.wgsl", generate_source())?;
         let generate = ComputePass::builder(ctx, &format!("{name}/generate"), &shader)
             .frame(renderer)
@@ -357,13 +370,17 @@ impl BeamMethod {
                     ("beams", &b.beams),
                 ],
             )
+            .bind(
+                BVH_GROUP,
+                &[("bvh_nodes", &bvh.nodes), ("bvh_triangles", &bvh.triangles)],
+            )
             .caller_group(2)
             .kernels(&["init_grid", "decide", "scan", "emit", "advance", "finalize"])
             // The kernels dispatched from the indirect arguments must not also bind
             // them as storage (group 2): a buffer is one or the other in a dispatch.
-            .kernel_groups("decide", &[0, 1])
+            .kernel_groups("decide", &[0, 1, BVH_GROUP])
             .kernel_groups("scan", &[0, 1])
-            .kernel_groups("emit", &[0, 1])
+            .kernel_groups("emit", &[0, 1, BVH_GROUP])
             .build()?;
         let args = indirect_args_group(device, &generate, &b.indirect_args)?;
 
@@ -504,14 +521,21 @@ impl CausticsMethod for BeamMethod {
         frame
             .encoder
             .copy_buffer_to_buffer(&b.control_init, 0, &b.control, 0, b.control.size());
-        renderer.gbuffer_pass().record(
-            frame,
-            &self.pass_names.light_gbuffer,
-            scene,
-            &self.light_gbuffer,
-        )?;
-        self.impostor_pass
-            .record_atlas(frame, &self.pass_names.impostors, scene, &self.atlas)?;
+        // Exact tracing reads neither the light G-buffer nor the impostors.
+        if self.config.beams.tracer == Tracer::Impostor {
+            renderer.gbuffer_pass().record(
+                frame,
+                &self.pass_names.light_gbuffer,
+                scene,
+                &self.light_gbuffer,
+            )?;
+            self.impostor_pass.record_atlas(
+                frame,
+                &self.pass_names.impostors,
+                scene,
+                &self.atlas,
+            )?;
+        }
         {
             let mut pass = self.generate.begin(frame)?;
             pass.set_bind_group(2, &self.args, &[]);

@@ -1,7 +1,9 @@
 // Light paths of grid vertices (Liktor & Dachsbacher 2011, Sect. 4.1 and 6): the
 // first hit comes from the light G-buffer, two-sided refraction and further specular
-// bounces from distance impostors (Szirmay-Kalos et al. 2005). Composed into
-// generate.wgsl after types.wgsl and the impostor functions.
+// bounces from distance impostors (Szirmay-Kalos et al. 2005); with `tracer` = bvh
+// (u.exact_trace) every hit comes from the scene's triangle BVH and analytic shapes
+// instead, with the adjoint shading-normal factor at each event. Composed into
+// generate.wgsl after types.wgsl, the impostor functions and triangle_bvh.wgsl.
 
 @group(1) @binding(0) var<uniform> u: BeamUniforms;
 @group(1) @binding(1) var light_position: texture_2d<f32>;
@@ -44,7 +46,10 @@ fn light_ray(uv: vec2<f32>) -> Ray {
 struct LightHit {
     hit: bool,
     position: vec3<f32>,
+    // Shading normal (outward for closed objects) and geometric normal on its side
+    // (the same from the light G-buffer, which stores one normal).
     normal: vec3<f32>,
+    ng: vec3<f32>,
     object: u32,
 }
 
@@ -99,7 +104,80 @@ fn light_gbuffer_at(uv: vec2<f32>, ray: Ray) -> LightHit {
     h.hit = true;
     h.position = ray.origin + t * ray.dir;
     h.normal = n;
+    h.ng = n;
     return h;
+}
+
+// Offset (m) past the surface a path leaves, for exact traces (wavefront's).
+const EXACT_EPS: f32 = 1e-4;
+
+// The first surface on the light ray, traced exactly (`tracer` = bvh). Anything
+// between the light and the ray's origin (the light view's near plane) shadows it.
+fn exact_first_hit(ray: Ray) -> LightHit {
+    var h: LightHit;
+    h.hit = false;
+    let s = scene_closest_hit(ray.origin, ray.dir, 0.0, NONE);
+    if s.object == NONE {
+        return h;
+    }
+    var behind = NO_HIT;
+    if u.light_dir_kind.w > 0.5 {
+        behind = distance(ray.origin, u.light_pos_start.xyz);
+    }
+    if scene_closest_hit(ray.origin, -ray.dir, 0.0, NONE).t < behind {
+        return h;
+    }
+    h.hit = true;
+    h.position = ray.origin + s.t * ray.dir;
+    h.normal = s.ns;
+    h.ng = s.ng;
+    h.object = s.object;
+    return h;
+}
+
+// A surface a path meets after its first: from an impostor (`ng` = `normal`, the
+// stored one; `object` unknown) or traced exactly.
+struct PathHit {
+    found: bool,
+    t: f32,
+    position: vec3<f32>,
+    normal: vec3<f32>,
+    ng: vec3<f32>,
+    object: u32,
+}
+
+fn from_impostor(h: ImpostorHit) -> PathHit {
+    var r: PathHit;
+    r.found = h.found;
+    r.t = h.t;
+    r.position = h.position;
+    r.normal = h.normal;
+    r.ng = h.normal;
+    r.object = NONE;
+    return r;
+}
+
+// The closest surface of the scene past `o` along `d`, skipping object `skip`.
+fn exact_hit(o: vec3<f32>, d: vec3<f32>, skip: u32) -> PathHit {
+    let h = scene_closest_hit(o, d, EXACT_EPS, skip);
+    var r: PathHit;
+    r.found = h.object != NONE;
+    r.t = h.t;
+    r.position = o + h.t * d;
+    r.normal = h.ns;
+    r.ng = h.ng;
+    r.object = h.object;
+    return r;
+}
+
+// Where the light inside the closed refractor in `slot` meets its surface again.
+fn exit_hit(slot: u32, p: vec3<f32>, d: vec3<f32>) -> PathHit {
+    if u.exact_trace == 1u {
+        var h = exact_hit(p, d, NONE);
+        h.found = h.found && h.object == u.specular[slot].object;
+        return h;
+    }
+    return from_impostor(trace_slot(slot, p, d, 1e-4, 2.0 * u.specular[slot].center_reach.w));
 }
 
 fn specular_slot_of(object: u32) -> u32 {
@@ -172,13 +250,20 @@ fn mix_signature(s: u32, object: u32, event: u32) -> u32 {
 // internal reflections, then total internal reflections elsewhere (followed: no light
 // is lost, no family needed) and generators met again (a ring's opposite wall, a
 // concave mesh). Fresnel reflections inside a refractor other than the first object
-// are not followed (they would need families of their own).
+// are not followed (they would need families of their own). With exact tracing every
+// event also takes the adjoint shading-normal factor (1 on analytic shapes), and a
+// path on which a mesh's shading and geometric normals disagree is dropped.
 fn trace_path(uv: vec2<f32>, family: u32) -> PathEnd {
     var e: PathEnd;
     e.valid = false;
     e.first_slot = NONE;
     let ray = light_ray(uv);
-    let g = light_gbuffer_at(uv, ray);
+    var g: LightHit;
+    if u.exact_trace == 1u {
+        g = exact_first_hit(ray);
+    } else {
+        g = light_gbuffer_at(uv, ray);
+    }
     if !g.hit {
         return e;
     }
@@ -213,6 +298,7 @@ fn trace_path(uv: vec2<f32>, family: u32) -> PathEnd {
     var p = g.position;
     var d = ray.dir;
     var n = g.normal;
+    var ng = g.ng;
     var sig = mix_signature(0u, g.object, 0u);
     for (var event = 0u; event < MAX_SPECULAR_EVENTS + u.bounces; event++) {
         let s = u.specular[slot];
@@ -221,6 +307,7 @@ fn trace_path(uv: vec2<f32>, family: u32) -> PathEnd {
         var n_leave = n;
         let nf = select(n, -n, dot(d, n) > 0.0);
         let cos_i = -dot(d, nf);
+        let d_in = d;
         if s.kind == MAT_MIRROR {
             d = reflect(d, nf);
             w *= s.color.xyz;
@@ -247,100 +334,137 @@ fn trace_path(uv: vec2<f32>, family: u32) -> PathEnd {
                     w *= 1.0 - fresnel;
                     d = normalize(t);
                 }
-                if dot(t, t) >= 0.5 && s.closed == 1u && entering {
-                    // Two-sided refraction (Sect. 6): the exit point from the impostor,
-                    // after the internal reflections the path takes. Each pass of the
-                    // loop reflects (spending `wanted` or `budget`) or leaves.
-                    var wanted = select(0u, internal, event == 0u);
-                    // In the first object the count of internal reflections is the
-                    // family's: a total internal reflection beyond it is another
-                    // family's light, not this one's.
-                    let counted = event == 0u && family != FAMILY_REFLECTED;
-                    var left = false;
-                    for (var k = 0u; k <= u.bounces; k++) {
-                        let h = trace_slot(slot, p, d, 1e-4, 2.0 * s.center_reach.w);
-                        if !h.found {
-                            return e;
-                        }
-                        w *= extinction(h.t);
-                        p = h.position;
-                        let n_out = h.normal;
-                        let cos_o = dot(d, n_out);
-                        let f_out = fresnel_dielectric(abs(cos_o), s.ior);
-                        let t2 = refract(d, select(n_out, -n_out, cos_o > 0.0), s.ior);
-                        let tir = dot(t2, t2) < 0.5;
-                        var reflects = wanted > 0u;
-                        if tir && !reflects {
-                            if counted || budget == 0u {
-                                return e;
-                            }
-                            budget -= 1u;
-                            reflects = true;
-                        } else if reflects {
-                            wanted -= 1u;
-                        }
-                        if reflects {
-                            // f_out is 1 under total internal reflection.
-                            w *= f_out;
-                            e.tir += u32(tir);
-                            d = reflect(d, n_out);
-                            sig = mix_signature(sig, s.object, EVENT_INTERNAL);
-                            continue;
-                        }
-                        w *= 1.0 - f_out;
-                        d = normalize(t2);
-                        n_leave = n_out;
-                        sig = mix_signature(sig, s.object, 1u);
-                        left = true;
-                        break;
-                    }
-                    if !left {
+            }
+        }
+        let k_event = adjoint_shading_factor(-d_in, d, n, ng);
+        if k_event < 0.0 {
+            return e;
+        }
+        w *= k_event;
+        if s.kind != MAT_MIRROR && s.closed == 1u && dot(d_in, n) < 0.0 && dot(d, n) < 0.0 {
+            // Two-sided refraction (Sect. 6): the exit point (from the impostor, or
+            // traced), after the internal reflections the path takes. Each pass of the
+            // loop reflects (spending `wanted` or `budget`) or leaves.
+            var wanted = select(0u, internal, event == 0u);
+            // In the first object the count of internal reflections is the
+            // family's: a total internal reflection beyond it is another
+            // family's light, not this one's.
+            let counted = event == 0u && family != FAMILY_REFLECTED;
+            var left = false;
+            for (var k = 0u; k <= u.bounces; k++) {
+                let h = exit_hit(slot, p, d);
+                if !h.found {
+                    return e;
+                }
+                w *= extinction(h.t);
+                p = h.position;
+                let n_out = h.normal;
+                let cos_o = dot(d, n_out);
+                let f_out = fresnel_dielectric(abs(cos_o), s.ior);
+                let t2 = refract(d, select(n_out, -n_out, cos_o > 0.0), s.ior);
+                let tir = dot(t2, t2) < 0.5;
+                var reflects = wanted > 0u;
+                if tir && !reflects {
+                    if counted || budget == 0u {
                         return e;
                     }
+                    budget -= 1u;
+                    reflects = true;
+                } else if reflects {
+                    wanted -= 1u;
+                }
+                let d_inside = d;
+                if reflects {
+                    // f_out is 1 under total internal reflection.
+                    w *= f_out;
+                    e.tir += u32(tir);
+                    d = reflect(d, n_out);
+                    sig = mix_signature(sig, s.object, EVENT_INTERNAL);
+                } else {
+                    w *= 1.0 - f_out;
+                    d = normalize(t2);
+                    n_leave = n_out;
+                    sig = mix_signature(sig, s.object, 1u);
+                    left = true;
+                }
+                let k_exit = adjoint_shading_factor(-d_inside, d, n_out, h.ng);
+                if k_exit < 0.0 {
+                    return e;
+                }
+                w *= k_exit;
+                if left {
+                    break;
                 }
             }
+            if !left {
+                return e;
+            }
         }
-        // The receiver this edge would land on, then any specular object before it.
-        let r = impostor_trace_at(impostor_map, receiver_layer(), u.receivers.xyz, p, d, 1e-4,
-                                  2.0 * u.scene_reach, u.impostor_tolerance * u.receivers.w);
+        // The receiver this edge would land on, and any specular object before it.
         var t_receiver = u.scene_reach;
-        if r.found {
-            t_receiver = r.t;
-        }
+        var end_object = NONE;
         var next = NONE;
-        var best: ImpostorHit;
-        best.t = t_receiver;
-        for (var k = 0u; k < u.specular_count; k++) {
-            // The paper's path does not meet the surface it just left again (convex or
-            // open generators; the stated limit of impostor tracing). With `bounces`
-            // left it may (the ring's opposite wall): that search starts 5 % of the
-            // reach away, so the point just left is not found again (as photon-hits),
-            // and not at all where the receiver is nearer (a search with t_max below
-            // t_min runs backwards, into the object just left).
-            var t_min = 1e-4;
-            if k == slot {
-                t_min = 0.05 * u.specular[k].center_reach.w;
-                if budget == 0u || t_min >= t_receiver {
-                    continue;
+        var best: PathHit;
+        if u.exact_trace == 1u {
+            // The paper's path passes through the surface it left (`bounces` = 0).
+            let h = exact_hit(p, d, select(NONE, s.object, budget == 0u));
+            if h.found {
+                let k = specular_slot_of(h.object);
+                if k == NONE {
+                    t_receiver = h.t;
+                    end_object = h.object;
+                } else {
+                    // A closed generator met again is met from outside; from inside it
+                    // is the surface just left, found again by rounding.
+                    if k == slot && s.closed == 1u && dot(d, h.ng) > 0.0 {
+                        return e;
+                    }
+                    next = k;
+                    best = h;
                 }
             }
-            let h = trace_slot(k, p, d, t_min, t_receiver);
-            // The same surface met again is approached from the side the path left it
-            // on. A closed one (normals stored outward) is met from outside: the path
-            // left it outwards and meets it inwards; one left inwards is an exit the
-            // impostor search misplaced onto the entry (where the paper's path passes
-            // through, and so does this one).
-            var again = k != slot;
-            if k == slot {
-                let leave = dot(d, n_leave);
-                let meet = dot(d, h.normal);
-                let outside = (leave > 0.0) && (meet < 0.0);
-                again = select((leave * meet) < 0.0, outside, u.specular[k].closed == 1u);
+        } else {
+            let r = impostor_trace_at(impostor_map, receiver_layer(), u.receivers.xyz, p, d, 1e-4,
+                                      2.0 * u.scene_reach, u.impostor_tolerance * u.receivers.w);
+            if r.found {
+                t_receiver = r.t;
+                end_object = impostor_object_at(impostor_ids, receiver_layer(), r.position - u.receivers.xyz);
             }
-            if h.found && h.t < best.t && again {
-                best = h;
-                next = k;
+            var nearest: ImpostorHit;
+            nearest.t = t_receiver;
+            for (var k = 0u; k < u.specular_count; k++) {
+                // The paper's path does not meet the surface it just left again (convex
+                // or open generators; the stated limit of impostor tracing). With
+                // `bounces` left it may (the ring's opposite wall): that search starts 5 %
+                // of the reach away, so the point just left is not found again (as
+                // photon-hits), and not at all where the receiver is nearer (a search
+                // with t_max below t_min runs backwards, into the object just left).
+                var t_min = 1e-4;
+                if k == slot {
+                    t_min = 0.05 * u.specular[k].center_reach.w;
+                    if budget == 0u || t_min >= t_receiver {
+                        continue;
+                    }
+                }
+                let h = trace_slot(k, p, d, t_min, t_receiver);
+                // The same surface met again is approached from the side the path left
+                // it on. A closed one (normals stored outward) is met from outside: the
+                // path left it outwards and meets it inwards; one left inwards is an exit
+                // the impostor search misplaced onto the entry (where the paper's path
+                // passes through, and so does this one).
+                var again = k != slot;
+                if k == slot {
+                    let leave = dot(d, n_leave);
+                    let meet = dot(d, h.normal);
+                    let outside = (leave > 0.0) && (meet < 0.0);
+                    again = select((leave * meet) < 0.0, outside, u.specular[k].closed == 1u);
+                }
+                if h.found && h.t < nearest.t && again {
+                    nearest = h;
+                    next = k;
+                }
             }
+            best = from_impostor(nearest);
         }
         if next == NONE {
             e.valid = true;
@@ -349,7 +473,7 @@ fn trace_path(uv: vec2<f32>, family: u32) -> PathEnd {
             e.weight = w;
             e.signature = sig;
             e.t_end = t_receiver;
-            e.end_object = select(NONE, impostor_object_at(impostor_ids, receiver_layer(), r.position - u.receivers.xyz), r.found);
+            e.end_object = end_object;
             return e;
         }
         if next == slot {
@@ -359,6 +483,7 @@ fn trace_path(uv: vec2<f32>, family: u32) -> PathEnd {
         w *= extinction(best.t);
         p = best.position;
         n = best.normal;
+        ng = best.ng;
         slot = next;
         sig = mix_signature(sig, u.specular[next].object, 2u);
     }

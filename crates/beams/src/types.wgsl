@@ -64,8 +64,10 @@ struct BeamUniforms {
     split_hit_px: f32,
     // Further specular events beyond the paper's path (`bounces`, path.wgsl).
     bounces: u32,
+    // 1: exact tracing through the scene's BVH and analytic shapes (`tracer` = bvh),
+    // 0: the light G-buffer and distance impostors (the paper's).
+    exact_trace: u32,
     pad1: u32,
-    pad2: u32,
 }
 
 // A triangle of the projected grid in the light's uv space.

@@ -23,10 +23,10 @@ use wgpu::util::DeviceExt;
 
 use crate::{GpuContext, GpuError};
 
-/// `BvhNode`, `BvhTriangle`, `TriangleHit`, `bvh_closest_hit` and, for method passes
-/// (it reads `objects` of `frame.wgsl`), `SceneHit` / `scene_closest_hit`. Compose
-/// after `frame.wgsl` with [`wgsl`], which puts its two buffers in a group of the
-/// caller's choice.
+/// `BvhNode`, `BvhTriangle`, `TriangleHit`, `bvh_closest_hit`, `adjoint_shading_factor`
+/// and, for method passes (it reads `objects` of `frame.wgsl`), `SceneHit` /
+/// `scene_closest_hit`. Compose after `frame.wgsl` with [`wgsl`], which puts its two
+/// buffers in a group of the caller's choice.
 pub const TRIANGLE_BVH_WGSL: &str = include_str!("shaders/triangle_bvh.wgsl");
 
 /// Depth of the traversal stack in `triangle_bvh.wgsl`; a deeper tree is refused at

@@ -97,19 +97,6 @@ fn refract_facing(d: vec3<f32>, n: vec3<f32>, eta: f32) -> vec4<f32> {
     return vec4<f32>(normalize(t), 1.0 - f);
 }
 
-// The adjoint shading-normal factor of one event (wi towards the light, wo onward), or
-// a negative value when ns and ng disagree about the side of either direction.
-fn shading_factor(wi: vec3<f32>, wo: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>) -> f32 {
-    let i_s = dot(wi, ns);
-    let i_g = dot(wi, ng);
-    let o_s = dot(wo, ns);
-    let o_g = dot(wo, ng);
-    if !(i_s * i_g > 0.0 && o_s * o_g > 0.0) {
-        return -1.0;
-    }
-    return abs(i_s * o_g / (o_s * i_g));
-}
-
 // Order-dependent hash of the specular events so far: object, and which side of it the
 // light arrived on (outside 0, inside 1).
 fn mix_path(h: u32, object: u32, inside: u32) -> u32 {
@@ -246,7 +233,7 @@ fn trace_vertices(@builtin(global_invocation_id) gid: vec3<u32>) {
                 }
             }
         }
-        let k = shading_factor(wi, wo, ns, ng);
+        let k = adjoint_shading_factor(wi, wo, ns, ng);
         if k < 0.0 {
             traced[i] = invalid(INVALID_WRONG_SIDE);
             count_vertex(INVALID_WRONG_SIDE);

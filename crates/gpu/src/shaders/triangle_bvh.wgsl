@@ -158,3 +158,19 @@ fn scene_closest_hit(o: vec3<f32>, d: vec3<f32>, t_min: f32, skip: u32) -> Scene
     }
     return best;
 }
+
+// The adjoint shading-normal factor of one specular event of light (adjoint)
+// transport with interpolated normals (Veach 1997, §5.3; DESIGN "Conventions"):
+// |wi·ns|·|wo·ng| / (|wo·ns|·|wi·ng|), wi towards the light, wo onward; 1 where ns = ng.
+// Negative when ns and ng disagree about the side of either direction (the path is
+// dropped, as the reference drops it).
+fn adjoint_shading_factor(wi: vec3<f32>, wo: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>) -> f32 {
+    let i_s = dot(wi, ns);
+    let i_g = dot(wi, ng);
+    let o_s = dot(wo, ns);
+    let o_g = dot(wo, ng);
+    if !(i_s * i_g > 0.0 && o_s * o_g > 0.0) {
+        return -1.0;
+    }
+    return abs(i_s * o_g / (o_s * i_g));
+}
