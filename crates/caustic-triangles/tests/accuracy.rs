@@ -11,7 +11,8 @@ use caustics_scene::{Scene, Vec3};
 use caustics_testing::{Bounds, Gpu, artifacts, builtin, plane_hit, refracting_sphere, scene};
 
 mod common;
-use common::{fresnel, run_concrete};
+use caustics_testing::fresnel_reflectance as fresnel;
+use common::run_concrete;
 
 /// A 1 m glass slab surface (an open refractor, one interface) 1 m above a diffuse
 /// floor, under a slanted directional light; the camera sits below the slab, so it sees

@@ -11,7 +11,8 @@ use caustics_scene::Scene;
 use caustics_testing::scene;
 
 mod common;
-use common::{fresnel, run_concrete};
+use caustics_testing::fresnel_reflectance as fresnel;
+use common::run_concrete;
 
 fn params(resolution: u32, bounces: u32, reflections: bool) -> CausticTrianglesParams {
     CausticTrianglesParams {

@@ -378,7 +378,7 @@ const TINY: &str = r#"{
   "frames": 2, "warmup": 0, "score_grid": 1,
   "reference": {"photons": 100000, "seed": 1, "batches": 4},
   "runs": [{"scenes": ["sphere_on_plane"], "methods": ["wavefront"], "params": {"grid": [32, 48]}},
-           {"scenes": ["water_pool"], "methods": ["pinhole"]}],
+           {"scenes": ["two_lenses"], "methods": ["pinhole"]}],
   "paper": {"source": "none", "hardware": "none",
             "figures": [{"scene": "sphere_on_plane", "method": "wavefront", "params": {"grid": 32},
                          "measure": "method_gpu_ms", "value": 1}]}

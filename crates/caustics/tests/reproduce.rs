@@ -19,7 +19,7 @@ const TINY: &str = r#"{
   "runs": [
     {"label": "pinhole", "scenes": ["ring", "sphere_on_plane"], "methods": ["pinhole"],
      "params": {"samples": [50, 100], "cube_size": 32, "samples_per_pass": 50}},
-    {"label": "wavefront", "scenes": ["ring", "water_pool"], "methods": ["wavefront", "pinhole"],
+    {"label": "wavefront", "scenes": ["ring", "sphere_over_water"], "methods": ["wavefront", "pinhole"],
      "params": {}}
   ],
   "paper": {"source": "none", "hardware": "imaginary GPU",
@@ -75,7 +75,7 @@ fn reproduce_then_shards_merged_equal_the_unsharded_run() {
     assert_eq!(whole.failed, 0);
     let dir = t.join("whole/tiny");
     let s = read_summary(&dir).expect("summary");
-    // 2 scenes x 2 sample counts, then ring and water_pool x 2 methods.
+    // 2 scenes x 2 sample counts, then ring and sphere_over_water x 2 methods.
     assert_eq!(s.runs.len(), 8);
     assert_eq!((s.done, s.skipped, s.failed), (7, 1, 0), "{:?}", s.runs);
     let skipped = s
@@ -83,12 +83,12 @@ fn reproduce_then_shards_merged_equal_the_unsharded_run() {
         .iter()
         .find(|r| r.status == "skipped")
         .expect("one skip");
-    assert_eq!(skipped.key, "water_pool/pinhole/default");
+    assert_eq!(skipped.key, "sphere_over_water/pinhole/default");
     assert!(
         skipped
             .reason
             .as_deref()
-            .is_some_and(|r| r.contains("heightfield"))
+            .is_some_and(|r| r.contains("both specular"))
     );
     // References were rendered on demand (one per scene the runs can use) and scored.
     let manifest = read_manifest(&dir).expect("manifest");
@@ -114,7 +114,7 @@ fn reproduce_then_shards_merged_equal_the_unsharded_run() {
         md.contains("paper (imaginary GPU)") && md.contains("method_gpu_ms 42"),
         "{md}"
     );
-    assert!(md.contains("water_pool/pinhole/default | skipped"), "{md}");
+    assert!(md.contains("sphere_over_water/pinhole/default | skipped"), "{md}");
     for p in [
         "plots/error_vs_time_ring.png",
         "plots/hdr_flip_vs_time_ring.png",

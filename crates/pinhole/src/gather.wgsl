@@ -1,9 +1,10 @@
 // Pass 2 of pinhole (Wand & Straßer 2003, §3.1): every receiver pixel loops over the
 // point samples of the generator, each a pinhole camera projecting the light's cube
-// map: the vector from the receiver x to the sample p is reflected (mirror) or
-// refracted through the sphere, the result looks up the light map, and the value is
-// weighted by cos(theta_s) cos(theta_x) A_s / (d² + eps) and by the reflectance or the
-// Fresnel transmittances. One instance of a fullscreen triangle per batch of samples,
+// map: the vector from the receiver x to the sample p is reflected (mirror), refracted
+// through the sphere, or refracted once at an open surface (the paper's "underwater
+// scenes", §5), the result looks up the light map, and the value is weighted by
+// cos(theta_s) cos(theta_x) A_s / (d² + eps) and by the reflectance or the Fresnel
+// transmittances. One instance of a fullscreen triangle per batch of samples,
 // added into the surface target (the paper's additive passes of a few samples each).
 // With filtering on, the lookup averages the map (footprint assembly, as texldd) over the
 // footprint of the sample's patch: the lookup vectors at p ± r t1 and p ± r t2, the
@@ -38,7 +39,8 @@ struct Path {
     // The last specular point before the light (the sample for a mirror, the entry
     // point for a refracting sphere).
     origin: vec3<f32>,
-    // Product of the Fresnel transmittances (1 for a mirror).
+    // Product of the Fresnel transmittances (1 for a mirror); one refraction also
+    // carries eta² (radiance scales with the squared index, flux does not).
     transmit: f32,
 }
 
@@ -58,11 +60,24 @@ fn sphere_exit(o: vec3<f32>, d: vec3<f32>, c: vec3<f32>, radius: f32) -> f32 {
 }
 
 // Follows the ray from the receiver through the sample at o (direction din, unit)
-// with surface normal n (mirror: the lit side's; sphere: outward) towards the light.
-fn trace_path(light: GpuLight, din: vec3<f32>, o: vec3<f32>, n: vec3<f32>) -> Path {
+// with surface normal n (mirror: the lit side's; sphere: outward; open surface: the
+// receiver's side) towards the light. eta: index on the receiver's side over the
+// light's (open surfaces only).
+fn trace_path(light: GpuLight, din: vec3<f32>, o: vec3<f32>, n: vec3<f32>, eta: f32) -> Path {
     if params.mode == MODE_MIRROR {
         let r = reflect(din, n);
         return Path(env_lookup(light, params, o, r), o, 1.0);
+    }
+    if params.mode == MODE_SURFACE_REFRACT {
+        // One refraction, receiver side to light side, with exact Fresnel. The radiance
+        // on the receiver's side is (1 - F) eta² times the light's.
+        let cos1 = -dot(din, n);
+        let out_dir = refract(din, n, eta);
+        let f = fresnel_dielectric(cos1, eta);
+        if cos1 <= 0.0 || f >= 1.0 || dot(out_dir, out_dir) < 0.5 {
+            return no_path();
+        }
+        return Path(env_lookup(light, params, o, normalize(out_dir)), o, (1.0 - f) * eta * eta);
     }
     // Refracting sphere: in at o, out at the far side, both with exact Fresnel.
     let obj = objects[params.generator];
@@ -91,12 +106,12 @@ fn trace_path(light: GpuLight, din: vec3<f32>, o: vec3<f32>, n: vec3<f32>) -> Pa
 // Lookup vector of the neighbour point p + offset with normal nn: with the receiver's
 // direction to that point (FILTER_FULL, the paper's finite differences) or with the
 // centre's direction and origin (FILTER_CURVATURE: the normal's change alone).
-fn neighbour_lookup(light: GpuLight, x: vec3<f32>, din: vec3<f32>, p: vec3<f32>, offset: vec3<f32>, nn: vec3<f32>) -> vec4<f32> {
+fn neighbour_lookup(light: GpuLight, x: vec3<f32>, din: vec3<f32>, p: vec3<f32>, offset: vec3<f32>, nn: vec3<f32>, eta: f32) -> vec4<f32> {
     if params.filtering == FILTER_FULL {
         let q = p + offset;
-        return trace_path(light, normalize(q - x), q, nn).lookup;
+        return trace_path(light, normalize(q - x), q, nn, eta).lookup;
     }
-    return trace_path(light, din, p, nn).lookup;
+    return trace_path(light, din, p, nn, eta).lookup;
 }
 
 fn central_difference(a: vec4<f32>, b: vec4<f32>) -> vec3<f32> {
@@ -117,7 +132,8 @@ fn fs_gather(in: VsOut) -> @location(0) vec4<f32> {
     let x = g.position;
     let nx = g.facing_normal;
     let x_start = x + nx * 1e-4;
-    let reflectance = materials[objects[params.generator].material].color.xyz;
+    let generator_material = materials[objects[params.generator].material];
+    let reflectance = generator_material.color.xyz;
     let first = in.batch * params.batch_size;
     let last = min(first + params.batch_size, params.sample_count);
     var irradiance = vec3<f32>(0.0);
@@ -133,16 +149,26 @@ fn fs_gather(in: VsOut) -> @location(0) vec4<f32> {
         if cos_x <= 0.0 {
             continue;
         }
+        // One-event generators read the light seen from the sample (prepare.wgsl).
         var side = 1.0;
         var radiance = vec3<f32>(0.0);
-        if params.mode == MODE_MIRROR {
+        let one_event = params.mode != MODE_SPHERE_REFRACT;
+        if one_event {
             let sl = sample_light[i];
             side = sl.w;
-            radiance = sl.xyz * reflectance;
+            radiance = sl.xyz;
+            if params.mode == MODE_MIRROR {
+                radiance *= reflectance;
+            }
         }
-        let n = side * s.normal.xyz;
+        // The normal on the receiver's side: the lit side of a mirror, the far side of a
+        // surface the light refracts through (the outward side of a sphere).
+        let facing = select(side, -side, params.mode == MODE_SURFACE_REFRACT);
+        // Open surfaces: the receiver is in the medium when the light is outside.
+        let eta = select(1.0 / generator_material.ior, generator_material.ior, side > 0.0);
+        let n = facing * s.normal.xyz;
         let cos_s = dot(n, wo);
-        if cos_s <= 0.0 || (params.mode == MODE_MIRROR && all(radiance == vec3<f32>(0.0))) {
+        if cos_s <= 0.0 || (one_event && all(radiance == vec3<f32>(0.0))) {
             continue;
         }
         // The segment from the (lifted) receiver point exactly to the sample; hits
@@ -153,12 +179,14 @@ fn fs_gather(in: VsOut) -> @location(0) vec4<f32> {
             continue;
         }
         let din = -wo;
-        let path = trace_path(light, din, p, n);
+        let path = trace_path(light, din, p, n, eta);
         if path.lookup.w == 0.0 {
             continue;
         }
         if params.mode == MODE_SPHERE_REFRACT {
             radiance = path.transmit * light_radiance(light, params, path.origin + 1e-4 * normalize(path.origin - objects[params.generator].p0.xyz), 0.0);
+        } else {
+            radiance *= path.transmit;
         }
         var gx = vec3<f32>(0.0);
         var gy = vec3<f32>(0.0);
@@ -167,16 +195,16 @@ fn fs_gather(in: VsOut) -> @location(0) vec4<f32> {
             let t1 = s.t1.xyz;
             let t2 = s.t2.xyz;
             // n(p + u t) = n + u k t on the surface; flipped with the side used.
-            let n1p = normalize(side * (s.normal.xyz + r * s.t1.w * t1));
-            let n1m = normalize(side * (s.normal.xyz - r * s.t1.w * t1));
-            let n2p = normalize(side * (s.normal.xyz + r * s.t2.w * t2));
-            let n2m = normalize(side * (s.normal.xyz - r * s.t2.w * t2));
+            let n1p = normalize(facing * (s.normal.xyz + r * s.t1.w * t1));
+            let n1m = normalize(facing * (s.normal.xyz - r * s.t1.w * t1));
+            let n2p = normalize(facing * (s.normal.xyz + r * s.t2.w * t2));
+            let n2m = normalize(facing * (s.normal.xyz - r * s.t2.w * t2));
             gx = central_difference(
-                neighbour_lookup(light, x, din, p, r * t1, n1p),
-                neighbour_lookup(light, x, din, p, -r * t1, n1m));
+                neighbour_lookup(light, x, din, p, r * t1, n1p, eta),
+                neighbour_lookup(light, x, din, p, -r * t1, n1m, eta));
             gy = central_difference(
-                neighbour_lookup(light, x, din, p, r * t2, n2p),
-                neighbour_lookup(light, x, din, p, -r * t2, n2m));
+                neighbour_lookup(light, x, din, p, r * t2, n2p, eta),
+                neighbour_lookup(light, x, din, p, -r * t2, n2m, eta));
         }
         let fetched = filtered_coverage(path.lookup.xyz, gx, gy);
         let coverage = fetched.x;

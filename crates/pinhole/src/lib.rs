@@ -43,11 +43,21 @@
 //!   point and its normal, as the paper; `filtering=curvature` moves the normal only
 //!   (zero footprint on a flat mirror); `filtering=off` point-samples level 0.
 //!
-//! Supports one light of any kind and one caustic generator: a mirror sphere, open
-//! cylinder (Wand's ring) or quad, or a dielectric sphere. Every object must be
-//! analytic (sphere, quad, cylinder), for the visibility tests. It renders one
-//! specular event per path (the paper's restriction): light reflected twice inside
-//! the ring, or reflected off the glass sphere, is missing; no volume caustics.
+//! Supports one light of any kind and one caustic generator: a mirror of any shape
+//! (sphere, open cylinder as Wand's ring, quad, triangle mesh, heightfield), a
+//! dielectric sphere (in and out: two refractions, the special case whose exit point is
+//! analytic), or an open dielectric surface (a heightfield, a quad, an open cylinder):
+//! one refraction, the paper's "single refractive interaction in the light path, such
+//! as underwater scenes" (§5). There the radiance on the receiver's side is (1 - F)·η²
+//! times the light's (radiance scales with the squared index; the flux does not). Meshes
+//! and heightfields are sampled on their triangles, with curvature from the triangles'
+//! vertex normals ([`sampling`]); visibility is traced against the analytic objects and
+//! the scene's triangle BVH (`caustics_gpu::triangle_bvh`), so any object may be a
+//! receiver or an occluder. It renders one specular event per path, as the paper
+//! (§5: "only one specular bounce can be handled. This seems to be an inherent
+//! restriction"): a glass mesh (in and out) and a second specular object are declined
+//! with that sentence; light reflected twice inside the ring, or reflected off the
+//! glass sphere or the water, is missing; no volume caustics.
 
 pub mod light_map;
 pub mod sampling;
@@ -71,9 +81,15 @@ const TYPES_WGSL: &str = include_str!("types.wgsl");
 const PREPARE_WGSL: &str = include_str!("prepare.wgsl");
 const GATHER_WGSL: &str = include_str!("gather.wgsl");
 
-/// A pass's full WGSL: shared GPU files, pinhole's types, then the pass.
+/// Group of both passes that holds the scene's triangle BVH (visibility).
+const BVH_GROUP: u32 = 2;
+
+/// A pass's full WGSL: shared GPU files, the scene's BVH, pinhole's types, then the pass.
 fn pass_source(pass: &str) -> String {
-    shader::compose_method(&format!("{TYPES_WGSL}\n{pass}"))
+    shader::compose_method(&format!(
+        "{}\n{TYPES_WGSL}\n{pass}",
+        caustics_gpu::triangle_bvh::wgsl(BVH_GROUP)
+    ))
 }
 
 /// Registry name.
@@ -185,8 +201,39 @@ impl Method for Pinhole {
     }
 }
 
-/// The scene's one caustic generator, or why `pinhole` cannot render the scene.
-pub fn caustic_generator(scene: &Scene) -> Result<usize, Unsupported> {
+/// Wand & Straßer's own words on the limit every decline of a second specular event
+/// quotes (§5).
+pub const ONE_BOUNCE: &str = "Wand & Straßer, §5: \"only one specular bounce can be handled. This seems to be an inherent restriction. Except from special cases, it seems not to be possible to handle multiple specular interactions on a light path with our technique\"";
+
+/// How pinhole follows the light through the generator.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GeneratorMode {
+    /// One reflection (a mirror of any shape).
+    Mirror,
+    /// In and out of a glass sphere: two refractions, the special case whose exit point
+    /// is analytic.
+    SphereRefraction,
+    /// One refraction at an open dielectric surface (water, a glass quad): the paper's
+    /// "single refractive interaction in the light path, such as underwater scenes"
+    /// (§5).
+    SurfaceRefraction,
+}
+
+impl GeneratorMode {
+    /// `mode` of `Params` in types.wgsl.
+    fn code(self) -> u32 {
+        match self {
+            GeneratorMode::Mirror => 0,
+            GeneratorMode::SphereRefraction => 1,
+            GeneratorMode::SurfaceRefraction => 2,
+        }
+    }
+}
+
+/// The scene's one caustic generator and how its light is followed, or why `pinhole`
+/// cannot render the scene. Any object may be a receiver or an occluder (visibility is
+/// traced through the scene's analytic shapes and its triangle BVH).
+pub fn caustic_generator(scene: &Scene) -> Result<(usize, GeneratorMode), Unsupported> {
     if scene.lights.len() != 1 {
         return Err(Unsupported(format!(
             "needs exactly one light (one cube map), the scene has {}",
@@ -195,38 +242,33 @@ pub fn caustic_generator(scene: &Scene) -> Result<usize, Unsupported> {
     }
     let mut generator = None;
     for (i, o) in scene.objects.iter().enumerate() {
-        if matches!(o.shape, Shape::Mesh(_) | Shape::Heightfield(_)) {
-            return Err(Unsupported(format!(
-                "objects[{i}] is a {}; pinhole's visibility tests need analytic objects (sphere, quad, cylinder)",
-                o.shape.kind()
-            )));
-        }
         let material = scene.material(o);
-        if !material.is_specular() {
-            continue;
-        }
-        let supported = matches!(
-            (material, &o.shape),
-            (Material::Mirror { .. }, _) | (Material::Dielectric { .. }, Shape::Sphere { .. })
-        );
-        if !supported {
+        let mode = match (material, &o.shape) {
+            (Material::Diffuse { .. }, _) => continue,
+            (Material::Mirror { .. }, _) => GeneratorMode::Mirror,
+            (Material::Dielectric { .. }, Shape::Sphere { .. }) => GeneratorMode::SphereRefraction,
+            (
+                Material::Dielectric { .. },
+                Shape::Quad { .. } | Shape::Heightfield(_) | Shape::Cylinder { .. },
+            ) => GeneratorMode::SurfaceRefraction,
+            (Material::Dielectric { .. }, Shape::Mesh(_)) => {
+                return Err(Unsupported(format!(
+                    "objects[{i}] is a dielectric mesh, which light enters and leaves: two specular events per path ({ONE_BOUNCE}; the glass sphere is the special case pinhole handles, its exit point being analytic)"
+                )));
+            }
+        };
+        if let Some((first, _)) = generator {
             return Err(Unsupported(format!(
-                "objects[{i}] is a dielectric {}; pinhole refracts through spheres only",
-                o.shape.kind()
+                "objects[{first}] and objects[{i}] are both specular; pinhole follows one specular object ({ONE_BOUNCE})"
             )));
         }
-        if let Some(first) = generator {
-            return Err(Unsupported(format!(
-                "objects[{first}] and objects[{i}] are both specular; pinhole follows one specular object (the paper's single interaction)"
-            )));
-        }
-        generator = Some(i);
+        generator = Some((i, mode));
     }
     generator.ok_or_else(|| Unsupported("the scene has no specular object".into()))
 }
 
 fn check_scene(scene: &Scene) -> Result<(), Unsupported> {
-    let g = caustic_generator(scene)?;
+    let (g, _) = caustic_generator(scene)?;
     if let Light::Point { position, .. } | Light::Spot { position, .. } = scene.lights[0] {
         let centre = scene.objects[g].shape.bounds().center();
         if position.distance(centre) < 1e-3 {
@@ -447,11 +489,21 @@ impl Pinhole {
             scene: scene.name.clone(),
             reason,
         };
-        let generator = caustic_generator(scene).map_err(unsupported)?;
+        let (generator, mode) = caustic_generator(scene).map_err(unsupported)?;
         check_scene(scene).map_err(unsupported)?;
+        let gpu_scene = renderer.scene();
         let shape = &scene.objects[generator].shape;
+        // Meshes and heightfields are sampled on the triangles the rasterizer draws and
+        // the BVH traces, so a sample lies exactly on the surface visibility sees.
+        let surface = match shape {
+            Shape::Mesh(_) | Shape::Heightfield(_) => {
+                sampling::Surface::triangles(&gpu_scene.meshes[generator])
+            }
+            _ => Ok(sampling::Surface::Analytic(shape)),
+        }
+        .map_err(|e| unsupported(Unsupported(e.to_string())))?;
         let samples = sampling::generate(
-            shape,
+            &surface,
             params.sampling,
             params.samples as usize,
             params.seed as u64,
@@ -459,15 +511,12 @@ impl Pinhole {
         .map_err(|e| unsupported(Unsupported(e.to_string())))?;
         let disc = LightDisc::new(
             &scene.lights[0],
-            shape.bounds().center(),
+            surface.bounds().center(),
             params.light_angle as f32,
         );
-        let mode = match scene.material(&scene.objects[generator]) {
-            Material::Dielectric { .. } => 1,
-            _ => 0,
-        };
         let sample_count = samples.len() as u32;
-        let gpu_params = gpu_params(params, generator as u32, mode, sample_count, &disc);
+        let gpu_params = gpu_params(params, generator as u32, mode.code(), sample_count, &disc);
+        let bvh = gpu_scene.triangle_bvh(ctx)?;
         let (buffers, map) = ctx.checked("pinhole setup", || {
             let buffers = Buffers::new(
                 &ctx.device,
@@ -478,7 +527,9 @@ impl Pinhole {
             (buffers, LightMap::new(ctx, params.cube_size, disc.alpha))
         })?;
 
-        // Pass 1: the light's radiance seen from each sample (mirrors).
+        let bvh_bindings: [(&str, &dyn caustics_gpu::pass::Bindable); 2] =
+            [("bvh_nodes", &bvh.nodes), ("bvh_triangles", &bvh.triangles)];
+        // Pass 1: the light's radiance seen from each sample (one-event generators).
         let shader = Shader::new(ctx, "pinhole prepare.wgsl", pass_source(PREPARE_WGSL))?;
         let prepare = ComputePass::builder(ctx, "pinhole/prepare_samples", &shader)
             .frame(renderer)
@@ -490,6 +541,7 @@ impl Pinhole {
                     ("sample_light", &buffers.sample_light),
                 ],
             )
+            .bind(BVH_GROUP, &bvh_bindings)
             .kernels(&["prepare_samples"])
             .build()?;
 
@@ -509,6 +561,7 @@ impl Pinhole {
                     ("light_sampler", &map.sampler),
                 ],
             )
+            .bind(BVH_GROUP, &bvh_bindings)
             .fragment("fs_gather", &[Some(additive_hdr_target())])
             .counted()
             .build()?;
@@ -701,13 +754,34 @@ mod tests {
 
     #[test]
     fn scene_support_is_declared() {
-        let ring = Scene::load(&caustics_scene::resolve("ring").expect("ring")).expect("load");
-        assert_eq!(caustic_generator(&ring), Ok(0));
-        let sphere =
-            Scene::load(&caustics_scene::resolve("sphere_on_plane").expect("s")).expect("load");
-        assert_eq!(caustic_generator(&sphere), Ok(0));
-        let pool = Scene::load(&caustics_scene::resolve("water_pool").expect("p")).expect("load");
-        let why = caustic_generator(&pool).expect_err("heightfield").0;
-        assert!(why.contains("analytic"), "{why}");
+        let load =
+            |name: &str| Scene::load(&caustics_scene::resolve(name).expect(name)).expect(name);
+        assert_eq!(
+            caustic_generator(&load("ring")),
+            Ok((0, GeneratorMode::Mirror))
+        );
+        assert_eq!(
+            caustic_generator(&load("sphere_on_plane")),
+            Ok((0, GeneratorMode::SphereRefraction))
+        );
+        // The paper's "underwater scenes": one refraction at the water surface.
+        assert_eq!(
+            caustic_generator(&load("water_pool")),
+            Ok((0, GeneratorMode::SurfaceRefraction))
+        );
+        // Two refractions through a glass mesh, two specular objects: the paper's
+        // one-bounce limit, quoted.
+        for (name, needle) in [
+            ("glass_cushion", "dielectric mesh"),
+            ("bumpy_glass", "dielectric mesh"),
+            ("two_lenses", "both specular"),
+            ("sphere_over_water", "both specular"),
+        ] {
+            let why = caustic_generator(&load(name)).expect_err(name).0;
+            assert!(
+                why.contains(needle) && why.contains("only one specular bounce can be handled"),
+                "{name}: {why}"
+            );
+        }
     }
 }

@@ -1,5 +1,6 @@
-// Pass 1 of pinhole: per sample of a mirror, the radiance of the light seen from the
-// sample (with the light's visibility from it) and which side of the mirror is lit.
+// Pass 1 of pinhole: per sample of a one-event generator (a mirror, an open surface
+// that refracts), the radiance of the light seen from the sample (with the light's
+// visibility from it) and which side of the surface is lit.
 // Both depend on the sample only, so the gather reads them instead of tracing a
 // shadow ray per pixel and sample. (Dielectric spheres: the point the light enters
 // depends on the pixel, so the gather traces that shadow ray itself.)

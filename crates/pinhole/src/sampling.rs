@@ -4,9 +4,14 @@
 //!
 //! Every strategy returns exactly the requested number of samples. Each sample
 //! carries its position, its unit normal, the principal directions and curvatures of
-//! the surface there (a "differential point sample", §3.3; analytic for the sphere,
-//! the open cylinder and the quad) and the surface area it stands for. The areas sum
-//! to the surface area:
+//! the surface there (a "differential point sample", §3.3) and the surface area it
+//! stands for. Curvature is analytic for the sphere, the open cylinder and the quad;
+//! on triangle meshes and tessellated heightfields ([`Surface::Triangles`]) it is the
+//! triangle's shape operator fitted to its vertex normals (Rusinkiewicz 2004, §3: the
+//! change of the normal along each edge), where the paper fits a second-order surface
+//! to a denser set of samples around each sample point: both estimate the same local
+//! second-order shape, and the vertex normals are the surface the scene defines. The
+//! areas sum to the surface area:
 //!
 //! * `random`: uniform by area; each sample stands for A/N.
 //! * `grid`: from 8N uniform candidates, one per occupied cube of a 3D grid whose cell
@@ -25,7 +30,7 @@
 
 use std::collections::HashMap;
 
-use caustics_scene::{Shape, Vec3, perpendicular_frame, quad_axes};
+use caustics_scene::{Aabb, Shape, TriangleMesh, Vec3, perpendicular_frame, quad_axes};
 use serde::{Deserialize, Serialize};
 
 /// Candidates per requested sample for the stratifying strategies (the paper's
@@ -99,12 +104,200 @@ pub struct PointSample {
 /// Why samples cannot be generated.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
 pub enum SamplingError {
-    /// Only spheres, open cylinders and quads have an analytic sampler.
+    /// Only spheres, open cylinders and quads have an analytic sampler (meshes and
+    /// heightfields are sampled through their triangles, [`Surface::triangles`]).
     #[error("no analytic point sampler for a {0}")]
     UnsupportedShape(&'static str),
     /// Zero samples requested.
     #[error("at least one sample is needed")]
     NoSamples,
+    /// The triangles have no area to sample.
+    #[error("the generator's triangles have no area")]
+    NoArea,
+}
+
+/// A generator's surface, as the sampler sees it.
+#[derive(Clone, Debug)]
+pub enum Surface<'a> {
+    /// An analytic shape (sphere, open cylinder, quad).
+    Analytic(&'a Shape),
+    /// World-space triangles with vertex normals (a mesh, a tessellated heightfield).
+    Triangles(TriangleSurface<'a>),
+}
+
+/// Triangles prepared for sampling by area: the cumulative areas, and each
+/// triangle's principal frame and curvatures.
+#[derive(Clone, Debug)]
+pub struct TriangleSurface<'a> {
+    mesh: &'a TriangleMesh,
+    /// Cumulative triangle areas (m²), ending at the total.
+    cumulative: Vec<f64>,
+    /// Per triangle: (t1, t2, k1, k2), the principal frame of its shape operator.
+    curvature: Vec<(Vec3, Vec3, f32, f32)>,
+}
+
+impl<'a> Surface<'a> {
+    /// The triangles of `mesh` (zero-area triangles are never drawn).
+    pub fn triangles(mesh: &'a TriangleMesh) -> Result<Self, SamplingError> {
+        let mut cumulative = Vec::with_capacity(mesh.triangle_count());
+        let mut curvature = Vec::with_capacity(mesh.triangle_count());
+        let mut total = 0.0f64;
+        for t in 0..mesh.triangle_count() {
+            let [a, b, c] = mesh.triangle(t);
+            let area = 0.5 * (b - a).cross(c - a).length();
+            total += if area.is_finite() { area as f64 } else { 0.0 };
+            cumulative.push(total);
+            curvature.push(triangle_curvature(mesh, t));
+        }
+        if total <= 0.0 {
+            return Err(SamplingError::NoArea);
+        }
+        Ok(Surface::Triangles(TriangleSurface {
+            mesh,
+            cumulative,
+            curvature,
+        }))
+    }
+
+    /// Surface area (m²).
+    pub fn area(&self) -> Result<f32, SamplingError> {
+        match self {
+            Surface::Analytic(shape) => area(shape),
+            Surface::Triangles(t) => Ok(*t.cumulative.last().unwrap_or(&0.0) as f32),
+        }
+    }
+
+    /// Bounds of the surface.
+    pub fn bounds(&self) -> Aabb {
+        match self {
+            Surface::Analytic(shape) => shape.bounds(),
+            Surface::Triangles(t) => Aabb::from_points(t.mesh.positions.iter().copied()),
+        }
+    }
+
+    /// The point at uniform coordinates (u1, u2, u3) ∈ [0, 1)³, uniform by area (an
+    /// analytic shape uses u1 and u2; triangles: u1 picks the triangle by area, u2 and
+    /// u3 the point in it).
+    pub fn point(&self, u1: f32, u2: f32, u3: f32) -> Result<SurfacePoint, SamplingError> {
+        match self {
+            Surface::Analytic(shape) => surface_point(shape, u1, u2),
+            Surface::Triangles(t) => Ok(t.point(u1, u2, u3)),
+        }
+    }
+}
+
+impl TriangleSurface<'_> {
+    fn point(&self, u1: f32, u2: f32, u3: f32) -> SurfacePoint {
+        let total = *self.cumulative.last().unwrap_or(&0.0);
+        let target = u1 as f64 * total;
+        // First triangle whose cumulative area exceeds the target: zero-area
+        // triangles (equal cumulative values) are never chosen.
+        let t = self
+            .cumulative
+            .partition_point(|&c| c <= target)
+            .min(self.cumulative.len() - 1);
+        // Uniform barycentrics (the square-root warp).
+        let r = u2.sqrt();
+        let (w1, w2) = (r * (1.0 - u3), r * u3);
+        let w0 = 1.0 - w1 - w2;
+        let i = &self.mesh.indices[3 * t..3 * t + 3];
+        let (p, n) = (&self.mesh.positions, &self.mesh.normals);
+        let [i0, i1, i2] = [i[0] as usize, i[1] as usize, i[2] as usize];
+        let position = w0 * p[i0] + w1 * p[i1] + w2 * p[i2];
+        let normal = (w0 * n[i0] + w1 * n[i1] + w2 * n[i2])
+            .try_normalize()
+            .unwrap_or_else(|| facet_normal(self.mesh, t));
+        let (t1, _, k1, k2) = self.curvature[t];
+        // The triangle's principal frame, made tangent to the interpolated normal.
+        let t1 = (t1 - t1.dot(normal) * normal)
+            .try_normalize()
+            .unwrap_or_else(|| perpendicular_frame(normal).0);
+        SurfacePoint {
+            position,
+            normal,
+            t1,
+            t2: normal.cross(t1),
+            k1,
+            k2,
+        }
+    }
+}
+
+fn facet_normal(mesh: &TriangleMesh, t: usize) -> Vec3 {
+    let [a, b, c] = mesh.triangle(t);
+    (b - a).cross(c - a).try_normalize().unwrap_or(Vec3::Y)
+}
+
+/// The principal directions and curvatures of triangle `t`: the symmetric 2×2 shape
+/// operator S (dn = S·dp in the facet's plane) that best fits the change of the vertex
+/// normals along the three edges in the least-squares sense (Rusinkiewicz 2004, eq. 6),
+/// then its eigenvectors. Sign: n(p + s·t1) ≈ n + s·k1·t1, so a sphere with outward
+/// normals has k = 1/r.
+fn triangle_curvature(mesh: &TriangleMesh, t: usize) -> (Vec3, Vec3, f32, f32) {
+    let nf = facet_normal(mesh, t);
+    let (u, v) = perpendicular_frame(nf);
+    let i = &mesh.indices[3 * t..3 * t + 3];
+    let corner = |k: usize| {
+        let j = i[k % 3] as usize;
+        (mesh.positions[j], mesh.normals[j])
+    };
+    // Normal equations of S = [[a, b], [b, c]] over the edges e (tangent coords
+    // (eu, ev)) with normal change dn (du, dv): S·e = dn.
+    let mut m = [[0.0f64; 3]; 3];
+    let mut rhs = [0.0f64; 3];
+    for k in 0..3 {
+        let (p0, n0) = corner(k);
+        let (p1, n1) = corner(k + 1);
+        let (e, dn) = (p1 - p0, n1 - n0);
+        let (eu, ev) = (e.dot(u) as f64, e.dot(v) as f64);
+        let (du, dv) = (dn.dot(u) as f64, dn.dot(v) as f64);
+        // du = a·eu + b·ev; dv = b·eu + c·ev.
+        let rows = [([eu, ev, 0.0], du), ([0.0, eu, ev], dv)];
+        for (row, y) in rows {
+            for r in 0..3 {
+                for c in 0..3 {
+                    m[r][c] += row[r] * row[c];
+                }
+                rhs[r] += row[r] * y;
+            }
+        }
+    }
+    let (a, b, c) = match solve3(m, rhs) {
+        Some(x) => (x[0], x[1], x[2]),
+        None => (0.0, 0.0, 0.0),
+    };
+    // Eigen-decomposition of the symmetric 2×2.
+    let mean = 0.5 * (a + c);
+    let diff = 0.5 * (a - c);
+    let root = (diff * diff + b * b).sqrt();
+    let (k1, k2) = (mean + root, mean - root);
+    let angle = 0.5 * (2.0 * b).atan2(a - c);
+    let t1 = (angle.cos() as f32) * u + (angle.sin() as f32) * v;
+    let t2 = nf.cross(t1);
+    (t1, t2, k1 as f32, k2 as f32)
+}
+
+/// Solves the 3×3 system m·x = rhs (Cramer's rule); None where it is singular.
+fn solve3(m: [[f64; 3]; 3], rhs: [f64; 3]) -> Option<[f64; 3]> {
+    let det = |m: &[[f64; 3]; 3]| {
+        m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
+            - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+            + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
+    };
+    let d = det(&m);
+    let scale = m.iter().flatten().fold(0.0f64, |a, &x| a.max(x.abs()));
+    if !d.is_finite() || d.abs() <= 1e-12 * scale.powi(3) {
+        return None;
+    }
+    let mut x = [0.0; 3];
+    for (k, xk) in x.iter_mut().enumerate() {
+        let mut mk = m;
+        for r in 0..3 {
+            mk[r][k] = rhs[r];
+        }
+        *xk = det(&mk) / d;
+    }
+    Some(x)
 }
 
 /// SplitMix64: a small, seedable, well-mixed generator (deterministic per seed).
@@ -205,11 +398,21 @@ pub fn surface_point(shape: &Shape, u1: f32, u2: f32) -> Result<SurfacePoint, Sa
     }
 }
 
-fn candidates(shape: &Shape, n: usize, rng: &mut Rng) -> Result<Vec<SurfacePoint>, SamplingError> {
+fn candidates(
+    surface: &Surface,
+    n: usize,
+    rng: &mut Rng,
+) -> Result<Vec<SurfacePoint>, SamplingError> {
     (0..n)
         .map(|_| {
             let (u1, u2) = (rng.next_f32(), rng.next_f32());
-            surface_point(shape, u1, u2)
+            // Analytic shapes draw two numbers per point (the sequences of existing
+            // seeds stay as they were); triangles a third.
+            let u3 = match surface {
+                Surface::Analytic(_) => 0.0,
+                Surface::Triangles(_) => rng.next_f32(),
+            };
+            surface.point(u1, u2, u3)
         })
         .collect()
 }
@@ -221,9 +424,10 @@ fn cell_of(p: Vec3, origin: Vec3, h: f32) -> Cell {
     (q.x.floor() as i64, q.y.floor() as i64, q.z.floor() as i64)
 }
 
-/// Generates exactly `n` samples on `shape` with `strategy`, deterministically for `seed`.
+/// Generates exactly `n` samples on `surface` with `strategy`, deterministically for
+/// `seed`.
 pub fn generate(
-    shape: &Shape,
+    surface: &Surface,
     strategy: Strategy,
     n: usize,
     seed: u64,
@@ -231,10 +435,10 @@ pub fn generate(
     if n == 0 {
         return Err(SamplingError::NoSamples);
     }
-    let total = area(shape)?;
+    let total = surface.area()?;
     let mut rng = Rng::new(seed);
     if strategy == Strategy::Random {
-        let points = candidates(shape, n, &mut rng)?;
+        let points = candidates(surface, n, &mut rng)?;
         return Ok(points
             .into_iter()
             .map(|point| PointSample {
@@ -244,8 +448,8 @@ pub fn generate(
             })
             .collect());
     }
-    let cands = candidates(shape, OVERSAMPLING * n, &mut rng)?;
-    let bounds = shape.bounds();
+    let cands = candidates(surface, OVERSAMPLING * n, &mut rng)?;
+    let bounds = surface.bounds();
     let diag = bounds.extent().length().max(1e-6);
     let origin = bounds.min - Vec3::splat(1e-4 * diag);
     // Kept candidate indices and the number of candidates each stands for.
@@ -399,11 +603,11 @@ mod tests {
     fn every_strategy_gives_the_requested_count_and_is_deterministic() {
         for strategy in Strategy::ALL {
             for n in [1, 7, 100, 1000] {
-                let a = generate(&ring(), strategy, n, 42).expect("samples");
+                let a = generate(&Surface::Analytic(&ring()), strategy, n, 42).expect("samples");
                 assert_eq!(a.len(), n, "{strategy:?} n={n}");
-                let b = generate(&ring(), strategy, n, 42).expect("samples");
+                let b = generate(&Surface::Analytic(&ring()), strategy, n, 42).expect("samples");
                 assert_eq!(a, b, "{strategy:?} n={n} not deterministic");
-                let c = generate(&ring(), strategy, n, 43).expect("samples");
+                let c = generate(&Surface::Analytic(&ring()), strategy, n, 43).expect("samples");
                 assert_ne!(a, c, "{strategy:?} n={n}: the seed changes nothing");
                 let total: f32 = a.iter().map(|s| s.area).sum();
                 let want = area(&ring()).expect("area");
@@ -418,7 +622,7 @@ mod tests {
     #[test]
     fn samples_lie_on_the_surface_except_quantized_ones() {
         for strategy in Strategy::ALL {
-            for s in generate(&ring(), strategy, 200, 3).expect("samples") {
+            for s in generate(&Surface::Analytic(&ring()), strategy, 200, 3).expect("samples") {
                 let p = s.point.position;
                 let off = ((p.x * p.x + p.z * p.z).sqrt() - 1.0).abs();
                 let bound = if strategy == Strategy::Quantized {
@@ -445,8 +649,15 @@ mod tests {
             }
             m
         };
-        let random = generate(&ring(), Strategy::Random, 300, 5).expect("random");
-        let poisson = generate(&ring(), Strategy::NeighborRemoval, 300, 5).expect("poisson");
+        let random =
+            generate(&Surface::Analytic(&ring()), Strategy::Random, 300, 5).expect("random");
+        let poisson = generate(
+            &Surface::Analytic(&ring()),
+            Strategy::NeighborRemoval,
+            300,
+            5,
+        )
+        .expect("poisson");
         let spacing = (area(&ring()).expect("area") / 300.0).sqrt();
         assert!(min_dist(&poisson) > 0.5 * spacing, "{}", min_dist(&poisson));
         assert!(min_dist(&random) < 0.2 * spacing, "{}", min_dist(&random));
@@ -472,8 +683,84 @@ mod tests {
     #[test]
     fn zero_samples_and_meshes_are_errors() {
         assert_eq!(
-            generate(&ring(), Strategy::Random, 0, 1),
+            generate(&Surface::Analytic(&ring()), Strategy::Random, 0, 1),
             Err(SamplingError::NoSamples)
         );
+    }
+
+    /// A sphere of radius 2 tessellated into 96 × 48 segments, sampled through its
+    /// triangles: the areas sum to the triangles' area, every sample lies on a triangle
+    /// with a unit normal close to the radial one, and the fitted curvatures are 1/r.
+    #[test]
+    fn triangle_samples_have_the_meshs_area_normals_and_curvature() {
+        let sphere = Shape::Sphere {
+            center: Vec3::new(0.0, 1.0, 0.0),
+            radius: 2.0,
+        };
+        let mesh = sphere.triangulate(&caustics_scene::Tessellation::default());
+        let surface = Surface::triangles(&mesh).expect("triangles");
+        let mesh_area = mesh.area();
+        assert!((surface.area().expect("area") - mesh_area).abs() < 1e-4 * mesh_area);
+        for strategy in Strategy::ALL {
+            let samples = generate(&surface, strategy, 500, 9).expect("samples");
+            assert_eq!(samples.len(), 500);
+            let total: f32 = samples.iter().map(|s| s.area).sum();
+            assert!(
+                (total - mesh_area).abs() < 1e-3 * mesh_area,
+                "{strategy:?}: {total}"
+            );
+            for s in &samples {
+                let p = s.point;
+                let radial = (p.position - Vec3::new(0.0, 1.0, 0.0)) / 2.0;
+                let off = (radial.length() - 1.0).abs();
+                assert!(off < 2e-3 + s.displacement, "{strategy:?}: {} off", off);
+                assert!((p.normal.length() - 1.0).abs() < 1e-5);
+                // (Quantized samples sit at their cube's centre, with the chosen point's
+                // normal.)
+                if strategy != Strategy::Quantized {
+                    assert!(p.normal.dot(radial.normalize()) > 0.999, "{strategy:?}");
+                }
+                assert!(p.t1.dot(p.normal).abs() < 1e-5 && p.t2.dot(p.normal).abs() < 1e-5);
+                assert!(
+                    (p.k1 - 0.5).abs() < 0.05 && (p.k2 - 0.5).abs() < 0.05,
+                    "k {} {}",
+                    p.k1,
+                    p.k2
+                );
+            }
+        }
+        assert_eq!(
+            generate(&surface, Strategy::Random, 10, 1),
+            generate(&surface, Strategy::Random, 10, 1)
+        );
+    }
+
+    /// A cylinder's triangles: curvature 1/r around, 0 along the axis, with the
+    /// principal directions found.
+    #[test]
+    fn triangle_curvature_finds_the_principal_directions() {
+        let mesh = ring().triangulate(&caustics_scene::Tessellation::default());
+        let surface = Surface::triangles(&mesh).expect("triangles");
+        for s in generate(&surface, Strategy::Random, 100, 4).expect("samples") {
+            let p = s.point;
+            let (around, along) = if p.k1.abs() >= p.k2.abs() {
+                ((p.k1, p.t1), (p.k2, p.t2))
+            } else {
+                ((p.k2, p.t2), (p.k1, p.t1))
+            };
+            assert!((around.0 - 1.0).abs() < 0.02, "k around {}", around.0);
+            assert!(along.0.abs() < 0.02, "k along {}", along.0);
+            assert!(along.1.dot(Vec3::Y).abs() > 0.999, "{}", along.1);
+        }
+    }
+
+    #[test]
+    fn meshes_without_area_are_refused() {
+        let mesh = TriangleMesh {
+            positions: vec![Vec3::ZERO, Vec3::X, 2.0 * Vec3::X],
+            normals: vec![Vec3::Y; 3],
+            indices: vec![0, 1, 2],
+        };
+        assert_eq!(Surface::triangles(&mesh).err(), Some(SamplingError::NoArea));
     }
 }

@@ -20,7 +20,8 @@ struct Params {
     light_index: u32,
     sample_count: u32,
     batch_size: u32,
-    // 0: mirror (one reflection), 1: dielectric sphere (refracted in and out).
+    // 0: mirror (one reflection), 1: dielectric sphere (refracted in and out),
+    // 2: open dielectric surface (one refraction: water, a glass quad).
     mode: u32,
     // 0: off, 1: curvature only, 2: full footprint (curvature and parallax, the paper).
     filtering: u32,
@@ -41,6 +42,7 @@ struct Params {
 
 const MODE_MIRROR: u32 = 0u;
 const MODE_SPHERE_REFRACT: u32 = 1u;
+const MODE_SURFACE_REFRACT: u32 = 2u;
 const FILTER_OFF: u32 = 0u;
 const FILTER_CURVATURE: u32 = 1u;
 const FILTER_FULL: u32 = 2u;
@@ -88,7 +90,8 @@ fn light_radiance(light: GpuLight, p: Params, o: vec3<f32>, skip_tol: f32) -> ve
     return light_intensity(light, u) * p.light_scale.x / cos_beta;
 }
 
-// Whether an analytic object blocks the segment from o along unit d over
+// Whether any surface of the scene (analytic objects exactly, meshes and heightfields
+// through the BVH) blocks the segment from o along unit d over
 // (start_tol, t_max - end_tol); the tolerances are at least 0.1 mm.
 fn occluded(o: vec3<f32>, d: vec3<f32>, t_max: f32, start_tol: f32, end_tol: f32) -> bool {
     let t_min = max(start_tol, 1e-4);
@@ -99,5 +102,5 @@ fn occluded(o: vec3<f32>, d: vec3<f32>, t_max: f32, start_tol: f32, end_tol: f32
             return true;
         }
     }
-    return false;
+    return bvh_closest_hit(o, d, t_min, t_end, NONE).object != NONE;
 }

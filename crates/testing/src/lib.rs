@@ -74,5 +74,5 @@ pub use compare::{
 };
 pub use gpu::{Gpu, Measured, Scored, context};
 pub use reference::{ReferenceImages, reference};
-pub use scenes::{builtin, builtin_json, plane_hit, scene};
+pub use scenes::{builtin, builtin_json, fresnel_reflectance, plane_hit, scene};
 pub use score::{reference_tone, score};

@@ -49,3 +49,17 @@ pub fn plane_hit(camera: &Camera, x: u32, y: u32, y_plane: f32) -> Option<Vec3> 
     let t = (y_plane - o.y) / d.y;
     (t.is_finite() && t > 0.0).then(|| o + d * t)
 }
+
+/// Exact unpolarized Fresnel reflectance (DESIGN "Conventions") at incidence `cos_i`,
+/// `eta` = n_i / n_t; 1 under total internal reflection. Computed here, independently
+/// of the shaders, for the tests' analytic answers.
+pub fn fresnel_reflectance(cos_i: f64, eta: f64) -> f64 {
+    let sin2_t = eta * eta * (1.0 - cos_i * cos_i);
+    if sin2_t >= 1.0 {
+        return 1.0;
+    }
+    let cos_t = (1.0 - sin2_t).sqrt();
+    let rs = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
+    let rp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
+    0.5 * (rs * rs + rp * rp)
+}

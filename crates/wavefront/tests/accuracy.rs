@@ -101,16 +101,6 @@ fn splat_statistics_vs_heatmap(measured: &Measured) -> (f64, f64) {
     (stats, fill)
 }
 
-/// Exact unpolarized Fresnel transmittance from air into a dielectric, computed here
-/// independently of the shaders.
-fn fresnel_transmittance(cos_i: f64, ior: f64) -> f64 {
-    let sin_t = (1.0 - cos_i * cos_i).sqrt() / ior;
-    let cos_t = (1.0 - sin_t * sin_t).sqrt();
-    let rs = (cos_i - ior * cos_t) / (cos_i + ior * cos_t);
-    let rp = (ior * cos_i - cos_t) / (ior * cos_i + cos_t);
-    1.0 - 0.5 * (rs * rs + rp * rp)
-}
-
 /// Checks every pixel of the central half of `surface` against `expected(channel)`
 /// within `bound` (relative), writing the images on failure.
 fn central_half_matches(surface: &HdrImage, expected: [f64; 3], bound: f64, what: &str) -> usize {
@@ -185,7 +175,7 @@ fn flat_water_gives_the_analytic_floor_radiance_within_one_percent() {
     // floor keeps its footprint. Every pixel of the central half sees the floor under
     // the flat water. 1 %: the method is exact here up to float rounding of the area
     // ratio (measured on lavapipe: 0.0026 %).
-    let t = fresnel_transmittance(cos_theta, ior);
+    let t = 1.0 - caustics_testing::fresnel_reflectance(cos_theta, 1.0 / ior);
     let expected =
         [0, 1, 2].map(|c| albedo[c] / std::f64::consts::PI * t * irradiance[c] * cos_theta);
     let (w, h) = (surface.width, surface.height);

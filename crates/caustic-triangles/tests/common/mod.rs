@@ -21,12 +21,3 @@ pub(crate) fn run_concrete(
     gpu.frame(&mut m);
     (gpu, m)
 }
-
-/// Exact unpolarized Fresnel reflectance (DESIGN "Conventions"), eta = n_i / n_t.
-pub(crate) fn fresnel(cos_i: f64, eta: f64) -> f64 {
-    let sin2_t = eta * eta * (1.0 - cos_i * cos_i);
-    let cos_t = (1.0 - sin2_t).sqrt();
-    let rs = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
-    let rp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
-    0.5 * (rs * rs + rp * rp)
-}
