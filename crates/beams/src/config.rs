@@ -4,6 +4,7 @@
 //! takes both as one [`BeamConfig`].
 
 use caustics_method::method_params;
+pub use caustics_method::params::Tracer;
 use caustics_method::params::{above, closed};
 use serde::{Deserialize, Serialize};
 
@@ -20,23 +21,6 @@ pub enum HullKind {
 }
 
 caustics_method::param_enum!(HullKind, [HullKind::Prism, HullKind::Tight]);
-
-/// How a corner's light path finds its surfaces after the light G-buffer.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Tracer {
-    /// The paper's (Sect. 6): the first hit from the light G-buffer, exits, further
-    /// generators and the receivers from distance impostors (Szirmay-Kalos et al.
-    /// 2005), which misplace points and normals on surfaces that are not star-shaped
-    /// around the impostor's centre (bumps, concave meshes).
-    Impostor,
-    /// Exact: every hit, the first included, from the scene's triangle BVH and the
-    /// analytic shapes (`caustics_gpu::triangle_bvh`), with the adjoint shading-normal
-    /// factor at each surface event (Veach 1997, §5.3), as the reference traces.
-    Bvh,
-}
-
-caustics_method::param_enum!(Tracer, [Tracer::Impostor, Tracer::Bvh]);
 
 /// Most refinement levels (the control buffer counts beams of levels 0..=4).
 pub const MAX_LEVELS: u32 = 4;

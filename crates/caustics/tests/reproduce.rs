@@ -114,7 +114,10 @@ fn reproduce_then_shards_merged_equal_the_unsharded_run() {
         md.contains("paper (imaginary GPU)") && md.contains("method_gpu_ms 42"),
         "{md}"
     );
-    assert!(md.contains("sphere_over_water/pinhole/default | skipped"), "{md}");
+    assert!(
+        md.contains("sphere_over_water/pinhole/default | skipped"),
+        "{md}"
+    );
     for p in [
         "plots/error_vs_time_ring.png",
         "plots/hdr_flip_vs_time_ring.png",
