@@ -63,12 +63,12 @@ fn sphere_exit(o: vec3<f32>, d: vec3<f32>, c: vec3<f32>, radius: f32) -> f32 {
 // with surface normal n (mirror: the lit side's; sphere: outward; open surface: the
 // receiver's side) towards the light. eta: index on the receiver's side over the
 // light's (open surfaces only).
-fn trace_path(light: GpuLight, din: vec3<f32>, o: vec3<f32>, n: vec3<f32>, eta: f32) -> Path {
-    if params.mode == MODE_MIRROR {
+fn trace_path(mode: u32, light: GpuLight, din: vec3<f32>, o: vec3<f32>, n: vec3<f32>, eta: f32) -> Path {
+    if mode == MODE_MIRROR || mode == MODE_FRESNEL_REFLECT {
         let r = reflect(din, n);
         return Path(env_lookup(light, params, o, r), o, 1.0);
     }
-    if params.mode == MODE_SURFACE_REFRACT {
+    if mode == MODE_SURFACE_REFRACT {
         // One refraction, receiver side to light side, with exact Fresnel. The radiance
         // on the receiver's side is (1 - F) eta² times the light's.
         let cos1 = -dot(din, n);
@@ -106,12 +106,12 @@ fn trace_path(light: GpuLight, din: vec3<f32>, o: vec3<f32>, n: vec3<f32>, eta: 
 // Lookup vector of the neighbour point p + offset with normal nn: with the receiver's
 // direction to that point (FILTER_FULL, the paper's finite differences) or with the
 // centre's direction and origin (FILTER_CURVATURE: the normal's change alone).
-fn neighbour_lookup(light: GpuLight, x: vec3<f32>, din: vec3<f32>, p: vec3<f32>, offset: vec3<f32>, nn: vec3<f32>, eta: f32) -> vec4<f32> {
+fn neighbour_lookup(mode: u32, light: GpuLight, x: vec3<f32>, din: vec3<f32>, p: vec3<f32>, offset: vec3<f32>, nn: vec3<f32>, eta: f32) -> vec4<f32> {
     if params.filtering == FILTER_FULL {
         let q = p + offset;
-        return trace_path(light, normalize(q - x), q, nn, eta).lookup;
+        return trace_path(mode, light, normalize(q - x), q, nn, eta).lookup;
     }
-    return trace_path(light, din, p, nn, eta).lookup;
+    return trace_path(mode, light, din, p, nn, eta).lookup;
 }
 
 fn central_difference(a: vec4<f32>, b: vec4<f32>) -> vec3<f32> {
@@ -119,6 +119,86 @@ fn central_difference(a: vec4<f32>, b: vec4<f32>) -> vec3<f32> {
         return vec3<f32>(0.0);
     }
     return a.xyz - b.xyz;
+}
+
+// The irradiance (rgb) that sample i sends to the receiver point x (normal nx) along
+// the generator's path `mode`, and the texture probes it took (w).
+fn sample_irradiance(i: u32, mode: u32, light: GpuLight, x: vec3<f32>, nx: vec3<f32>, x_start: vec3<f32>) -> vec4<f32> {
+    let generator_material = materials[objects[params.generator].material];
+    let s = samples[i];
+    let p = s.pos.xyz;
+    let to_x = x - p;
+    let d2 = dot(to_x, to_x);
+    let dist = sqrt(d2);
+    let wo = to_x / dist;
+    let cos_x = -dot(nx, wo);
+    if cos_x <= 0.0 {
+        return vec4<f32>(0.0);
+    }
+    // One-event paths read the light seen from the sample (prepare.wgsl).
+    var side = 1.0;
+    var radiance = vec3<f32>(0.0);
+    let one_event = mode != MODE_SPHERE_REFRACT;
+    if one_event {
+        let sl = sample_light[i];
+        side = sl.w;
+        radiance = sl.xyz;
+    }
+    // The normal on the receiver's side: the lit side of a mirror (or of a reflecting
+    // dielectric), the far side of a surface the light refracts through (the outward
+    // side of a sphere).
+    let facing = select(side, -side, mode == MODE_SURFACE_REFRACT);
+    // Open surfaces: the receiver is in the medium when the light is outside.
+    let eta = select(1.0 / generator_material.ior, generator_material.ior, side > 0.0);
+    let n = facing * s.normal.xyz;
+    let cos_s = dot(n, wo);
+    if cos_s <= 0.0 || (one_event && all(radiance == vec3<f32>(0.0))) {
+        return vec4<f32>(0.0);
+    }
+    if mode == MODE_MIRROR {
+        radiance *= generator_material.color.xyz;
+    } else if mode == MODE_FRESNEL_REFLECT {
+        // The dielectric's Fresnel reflectance from the light's side (angle of
+        // incidence = angle of reflection = theta_s).
+        radiance *= fresnel_dielectric(cos_s, select(generator_material.ior, 1.0 / generator_material.ior, side > 0.0));
+    }
+    // The segment from the (lifted) receiver point exactly to the sample; hits
+    // within 1e-3 of its length from the sample are the sample's own surface.
+    let seg = p - x_start;
+    let seg_len = length(seg);
+    if occluded(x_start, seg / seg_len, seg_len, 0.0, max(s.extra.y, 1e-3 * seg_len)) {
+        return vec4<f32>(0.0);
+    }
+    let din = -wo;
+    let path = trace_path(mode, light, din, p, n, eta);
+    if path.lookup.w == 0.0 {
+        return vec4<f32>(0.0);
+    }
+    if mode == MODE_SPHERE_REFRACT {
+        radiance = path.transmit * light_radiance(light, params, path.origin + 1e-4 * normalize(path.origin - objects[params.generator].p0.xyz), 0.0);
+    } else {
+        radiance *= path.transmit;
+    }
+    var gx = vec3<f32>(0.0);
+    var gy = vec3<f32>(0.0);
+    if params.filtering != FILTER_OFF {
+        let r = s.extra.x;
+        let t1 = s.t1.xyz;
+        let t2 = s.t2.xyz;
+        // n(p + u t) = n + u k t on the surface; flipped with the side used.
+        let n1p = normalize(facing * (s.normal.xyz + r * s.t1.w * t1));
+        let n1m = normalize(facing * (s.normal.xyz - r * s.t1.w * t1));
+        let n2p = normalize(facing * (s.normal.xyz + r * s.t2.w * t2));
+        let n2m = normalize(facing * (s.normal.xyz - r * s.t2.w * t2));
+        gx = central_difference(
+            neighbour_lookup(mode, light, x, din, p, r * t1, n1p, eta),
+            neighbour_lookup(mode, light, x, din, p, -r * t1, n1m, eta));
+        gy = central_difference(
+            neighbour_lookup(mode, light, x, din, p, r * t2, n2p, eta),
+            neighbour_lookup(mode, light, x, din, p, -r * t2, n2m, eta));
+    }
+    let fetched = filtered_coverage(path.lookup.xyz, gx, gy);
+    return vec4<f32>(radiance * (fetched.x * cos_s * cos_x * s.pos.w / (d2 + s.normal.w)), fetched.y);
 }
 
 @fragment
@@ -132,84 +212,22 @@ fn fs_gather(in: VsOut) -> @location(0) vec4<f32> {
     let x = g.position;
     let nx = g.facing_normal;
     let x_start = x + nx * 1e-4;
-    let generator_material = materials[objects[params.generator].material];
-    let reflectance = generator_material.color.xyz;
     let first = in.batch * params.batch_size;
     let last = min(first + params.batch_size, params.sample_count);
+    // A dielectric's Fresnel reflection (`reflections`) is a second pinhole image per
+    // sample: the sample as a mirror of reflectance F.
+    let reflect_too = params.reflections == 1u && params.mode != MODE_MIRROR;
     var irradiance = vec3<f32>(0.0);
     var fetches = 0u;
     for (var i = first; i < last; i++) {
-        let s = samples[i];
-        let p = s.pos.xyz;
-        let to_x = x - p;
-        let d2 = dot(to_x, to_x);
-        let dist = sqrt(d2);
-        let wo = to_x / dist;
-        let cos_x = -dot(nx, wo);
-        if cos_x <= 0.0 {
-            continue;
+        let c = sample_irradiance(i, params.mode, light, x, nx, x_start);
+        irradiance += c.xyz;
+        fetches += u32(c.w);
+        if reflect_too {
+            let r = sample_irradiance(i, MODE_FRESNEL_REFLECT, light, x, nx, x_start);
+            irradiance += r.xyz;
+            fetches += u32(r.w);
         }
-        // One-event generators read the light seen from the sample (prepare.wgsl).
-        var side = 1.0;
-        var radiance = vec3<f32>(0.0);
-        let one_event = params.mode != MODE_SPHERE_REFRACT;
-        if one_event {
-            let sl = sample_light[i];
-            side = sl.w;
-            radiance = sl.xyz;
-            if params.mode == MODE_MIRROR {
-                radiance *= reflectance;
-            }
-        }
-        // The normal on the receiver's side: the lit side of a mirror, the far side of a
-        // surface the light refracts through (the outward side of a sphere).
-        let facing = select(side, -side, params.mode == MODE_SURFACE_REFRACT);
-        // Open surfaces: the receiver is in the medium when the light is outside.
-        let eta = select(1.0 / generator_material.ior, generator_material.ior, side > 0.0);
-        let n = facing * s.normal.xyz;
-        let cos_s = dot(n, wo);
-        if cos_s <= 0.0 || (one_event && all(radiance == vec3<f32>(0.0))) {
-            continue;
-        }
-        // The segment from the (lifted) receiver point exactly to the sample; hits
-        // within 1e-3 of its length from the sample are the sample's own surface.
-        let seg = p - x_start;
-        let seg_len = length(seg);
-        if occluded(x_start, seg / seg_len, seg_len, 0.0, max(s.extra.y, 1e-3 * seg_len)) {
-            continue;
-        }
-        let din = -wo;
-        let path = trace_path(light, din, p, n, eta);
-        if path.lookup.w == 0.0 {
-            continue;
-        }
-        if params.mode == MODE_SPHERE_REFRACT {
-            radiance = path.transmit * light_radiance(light, params, path.origin + 1e-4 * normalize(path.origin - objects[params.generator].p0.xyz), 0.0);
-        } else {
-            radiance *= path.transmit;
-        }
-        var gx = vec3<f32>(0.0);
-        var gy = vec3<f32>(0.0);
-        if params.filtering != FILTER_OFF {
-            let r = s.extra.x;
-            let t1 = s.t1.xyz;
-            let t2 = s.t2.xyz;
-            // n(p + u t) = n + u k t on the surface; flipped with the side used.
-            let n1p = normalize(facing * (s.normal.xyz + r * s.t1.w * t1));
-            let n1m = normalize(facing * (s.normal.xyz - r * s.t1.w * t1));
-            let n2p = normalize(facing * (s.normal.xyz + r * s.t2.w * t2));
-            let n2m = normalize(facing * (s.normal.xyz - r * s.t2.w * t2));
-            gx = central_difference(
-                neighbour_lookup(light, x, din, p, r * t1, n1p, eta),
-                neighbour_lookup(light, x, din, p, -r * t1, n1m, eta));
-            gy = central_difference(
-                neighbour_lookup(light, x, din, p, r * t2, n2p, eta),
-                neighbour_lookup(light, x, din, p, -r * t2, n2m, eta));
-        }
-        let fetched = filtered_coverage(path.lookup.xyz, gx, gy);
-        let coverage = fetched.x;
-        fetches += u32(fetched.y);
-        irradiance += radiance * (coverage * cos_s * cos_x * s.pos.w / (d2 + s.normal.w));
     }
     if FILL_COUNT {
         atomicAdd(&counters[0], 1u);

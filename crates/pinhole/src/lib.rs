@@ -56,8 +56,10 @@
 //! receiver or an occluder. It renders one specular event per path, as the paper
 //! (§5: "only one specular bounce can be handled. This seems to be an inherent
 //! restriction"): a glass mesh (in and out) and a second specular object are declined
-//! with that sentence; light reflected twice inside the ring, or reflected off the
-//! glass sphere or the water, is missing; no volume caustics.
+//! with that sentence; light reflected twice inside the ring is missing, and so, by
+//! default (the paper's), is the light a dielectric reflects: `reflections` adds it,
+//! each sample also a mirror of Fresnel reflectance F (one specular bounce, which the
+//! technique handles); no volume caustics.
 
 pub mod light_map;
 pub mod sampling;
@@ -158,6 +160,8 @@ method_params! {
         epsilon_scale: f64 = 1.0 => above(0.0, 100.0);
         /// samples per gather instance (additive passes; 1 to 4096)
         samples_per_pass: u32 = 64 => closed(1.0, 4096.0);
+        /// also project the Fresnel reflection off a dielectric generator: each sample a second pinhole, a mirror of reflectance F (one specular bounce, within the paper's technique; the paper does not; doubles the gather's work)
+        reflections: bool = false;
     }
     check = |p: &PinholeParams| {
         if p.cube_size.is_power_of_two() {
@@ -301,7 +305,8 @@ struct GpuParams {
     batch_size: u32,
     mode: u32,
     filtering: u32,
-    _pad: [u32; 2],
+    reflections: u32,
+    _pad: u32,
     map_center: [f32; 4],
     map_axis: [f32; 4],
     map_u: [f32; 4],
@@ -400,7 +405,8 @@ fn gpu_params(
         batch_size: params.samples_per_pass,
         mode,
         filtering: params.filtering.code(),
-        _pad: [0; 2],
+        reflections: u32::from(params.reflections),
+        _pad: 0,
         map_center: disc.center.extend(0.0).to_array(),
         map_axis: disc.axis.extend(disc.radius).to_array(),
         map_u: map_u.extend(0.0).to_array(),
@@ -639,6 +645,7 @@ mod tests {
                 batch_size,
                 mode,
                 filtering,
+                reflections,
                 map_center,
                 map_axis,
                 map_u,
@@ -734,7 +741,8 @@ mod tests {
                 "light_angle": 0.016,
                 "cube_size": 256,
                 "epsilon_scale": 1.0,
-                "samples_per_pass": 64
+                "samples_per_pass": 64,
+                "reflections": false
             })
         );
     }

@@ -25,7 +25,8 @@ struct Params {
     mode: u32,
     // 0: off, 1: curvature only, 2: full footprint (curvature and parallax, the paper).
     filtering: u32,
-    pad0: u32,
+    // 1: also the Fresnel reflection off a dielectric generator (`reflections`).
+    reflections: u32,
     pad1: u32,
     // xyz: centre c of the cube map (point/spot: the generator's centre); w: unused.
     map_center: vec4<f32>,
@@ -43,6 +44,8 @@ struct Params {
 const MODE_MIRROR: u32 = 0u;
 const MODE_SPHERE_REFRACT: u32 = 1u;
 const MODE_SURFACE_REFRACT: u32 = 2u;
+// The Fresnel reflection off a dielectric generator (a path of its own, `reflections`).
+const MODE_FRESNEL_REFLECT: u32 = 3u;
 const FILTER_OFF: u32 = 0u;
 const FILTER_CURVATURE: u32 = 1u;
 const FILTER_FULL: u32 = 2u;
