@@ -160,7 +160,7 @@ method_params! {
         epsilon_scale: f64 = 1.0 => above(0.0, 100.0);
         /// samples per gather instance (additive passes; 1 to 4096)
         samples_per_pass: u32 = 64 => closed(1.0, 4096.0);
-        /// also project the Fresnel reflection off a dielectric generator: each sample a second pinhole, a mirror of reflectance F (one specular bounce, within the paper's technique; the paper does not; doubles the gather's work)
+        /// also project the Fresnel reflection off a dielectric generator: each sample a second pinhole, a mirror of reflectance F (one specular bounce, within the paper's technique; the paper does not; a second path per sample and pixel)
         reflections: bool = false;
     }
     check = |p: &PinholeParams| {
