@@ -438,22 +438,20 @@ fn fresnel_reflection_adds_the_glass_spheres_halo() {
         )
     };
     let (paper, extended) = (run(false), run(true));
-    let flux = |c: &caustics_testing::Comparison| c.errors.flux_ratio.unwrap_or(f64::NAN);
-    let flip = |c: &caustics_testing::Comparison| c.errors.hdr_flip_after_flux.unwrap_or(f64::NAN);
     eprintln!(
         "paper: flux {:.4}, HDR-FLIP after flux {:.4}; reflections: flux {:.4}, HDR-FLIP after flux {:.4}",
-        flux(&paper),
-        flip(&paper),
-        flux(&extended),
-        flip(&extended)
+        paper.flux(),
+        paper.hdr_flip(),
+        extended.flux(),
+        extended.hdr_flip()
     );
     assert!(
-        flux(&extended) > flux(&paper) && flip(&extended) < 0.8 * flip(&paper),
+        extended.flux() > paper.flux() && extended.hdr_flip() < 0.8 * paper.hdr_flip(),
         "reflections did not add the halo: flux {} -> {}, HDR-FLIP {} -> {}",
-        flux(&paper),
-        flux(&extended),
-        flip(&paper),
-        flip(&extended)
+        paper.flux(),
+        extended.flux(),
+        paper.hdr_flip(),
+        extended.hdr_flip()
     );
     extended.check(
         &artifacts!(),

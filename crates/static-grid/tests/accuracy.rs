@@ -87,24 +87,22 @@ fn extended_light_paths_bring_the_glass_sphere_closer_to_the_reference() {
     let paper = caustics_testing::refracting_sphere_with(&info, serde_json::json!({}));
     let extended =
         caustics_testing::refracting_sphere_with(&info, serde_json::json!({"bounces": 2}));
-    let flux = |c: &caustics_testing::Comparison| c.errors.flux_ratio.unwrap_or(f64::NAN);
-    let flip = |c: &caustics_testing::Comparison| c.errors.hdr_flip_after_flux.unwrap_or(f64::NAN);
     eprintln!(
         "paper: flux {:.4}, HDR-FLIP after flux {:.4}; bounces 2: flux {:.4}, HDR-FLIP after flux {:.4}; internal-reflection beams {}",
-        flux(&paper),
-        flip(&paper),
-        flux(&extended),
-        flip(&extended),
+        paper.flux(),
+        paper.hdr_flip(),
+        extended.flux(),
+        extended.hdr_flip(),
         extended.measured.counter("beams_path_internal_2")
     );
     assert!(extended.measured.counter("beams_path_internal_2") > 0);
     assert!(
-        flux(&extended) > flux(&paper) && flip(&extended) < flip(&paper),
+        extended.flux() > paper.flux() && extended.hdr_flip() < paper.hdr_flip(),
         "bounces did not help: flux {} -> {}, HDR-FLIP {} -> {}",
-        flux(&paper),
-        flux(&extended),
-        flip(&paper),
-        flip(&extended)
+        paper.flux(),
+        extended.flux(),
+        paper.hdr_flip(),
+        extended.hdr_flip()
     );
     extended.check(
         &artifacts!(),
@@ -140,21 +138,20 @@ fn exact_tracing_brings_a_bumpy_glass_mesh_closer_to_the_reference() {
         )
     };
     let (paper, exact) = (run("impostor"), run("bvh"));
-    let flux = |c: &caustics_testing::Comparison| c.errors.flux_ratio.unwrap_or(f64::NAN);
     let beams = |c: &caustics_testing::Comparison| c.measured.counter("beams_path_main");
     eprintln!(
         "impostor: flux {:.4}, {} main beams; bvh: flux {:.4}, {} main beams, counters {:?}",
-        flux(&paper),
+        paper.flux(),
         beams(&paper),
-        flux(&exact),
+        exact.flux(),
         beams(&exact),
         exact.measured.counters
     );
     assert!(
-        flux(&exact) > flux(&paper) + 0.01 && beams(&exact) > beams(&paper),
+        exact.flux() > paper.flux() + 0.01 && beams(&exact) > beams(&paper),
         "exact tracing did not help: flux {} -> {}, main beams {} -> {}",
-        flux(&paper),
-        flux(&exact),
+        paper.flux(),
+        exact.flux(),
         beams(&paper),
         beams(&exact)
     );

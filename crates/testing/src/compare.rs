@@ -134,6 +134,17 @@ impl Comparison {
         });
     }
 
+    /// The surface caustic's flux ratio (NaN where the reference has no caustic region),
+    /// for tests that compare two settings of a method.
+    pub fn flux(&self) -> f64 {
+        self.errors.flux_ratio.unwrap_or(f64::NAN)
+    }
+
+    /// HDR-FLIP after flux normalization (NaN where undefined), as [`Comparison::flux`].
+    pub fn hdr_flip(&self) -> f64 {
+        self.errors.hdr_flip_after_flux.unwrap_or(f64::NAN)
+    }
+
     /// Every metric of the method's image moved by one pixel to the right, against the
     /// same reference (the same tone map as [`Comparison::errors`]): what a focus one
     /// pixel off scores, which a test's bound must refuse.
