@@ -7,14 +7,13 @@ use caustics_reference::{Reference, ReferenceError};
 use caustics_scene::{Scene, Shape, Vec3};
 
 fn scene_with_triangle() -> Scene {
-    // A folder of this call (no tempfile dependency in this crate; tests run in
-    // parallel, so each call writes its own).
-    static CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
-    let call = CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-    let dir =
-        std::env::temp_dir().join(format!("caustics-ref-range-{}-{call}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("mkdir");
-    std::fs::write(dir.join("t.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").expect("write");
+    // The mesh is read while the scene loads, so its folder can go when this returns.
+    let dir = tempfile::tempdir().expect("temp dir");
+    std::fs::write(
+        dir.path().join("t.obj"),
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+    )
+    .expect("write");
     let json = r#"{
       "name": "t",
       "camera": {"eye": [0, 3, 5], "target": [0, 0, 0], "up": [0, 1, 0],
@@ -26,7 +25,7 @@ fn scene_with_triangle() -> Scene {
                   {"shape": {"type": "quad", "center": [0, 0, 0], "normal": [0, 1, 0],
                              "size": [4, 4]}, "material": "floor"}]
     }"#;
-    Scene::from_json_str(json, &dir.join("s.json")).expect("scene")
+    Scene::from_json_str(json, &dir.path().join("s.json")).expect("scene")
 }
 
 #[test]

@@ -25,25 +25,10 @@
 //! check there is that its caustic power converges to the analytic sphere's as the
 //! mesh is refined, with the factor applied at every vertex.
 
-use std::collections::HashMap;
-use std::f64::consts::PI;
-use std::path::PathBuf;
-
 use caustics_reference::{Reference, ReferenceOptions, ReferenceResult};
 use caustics_scene::{Scene, Vec3};
-
-/// A folder of its own for each call (no tempfile dependency in this crate; tests run
-/// in parallel).
-fn temp_dir(tag: &str) -> PathBuf {
-    static CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
-    let call = CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-    let dir = std::env::temp_dir().join(format!(
-        "caustics-ref-shading-{tag}-{}-{call}",
-        std::process::id()
-    ));
-    std::fs::create_dir_all(&dir).expect("mkdir");
-    dir
-}
+use std::collections::HashMap;
+use std::f64::consts::PI;
 
 /// An OBJ of an n × n grid of quads (two triangles each) centred at `c`, spanning
 /// ±`half[0]` along `u` and ±`half[1]` along `v`, wound counter-clockwise seen from
@@ -69,10 +54,11 @@ fn sheet_obj(c: Vec3, u: Vec3, v: Vec3, half: [f32; 2], n: u32, ns: Vec3) -> Str
 }
 
 /// The scene `json` with its mesh `sheet.obj` holding `obj`.
-fn scene_with_sheet(tag: &str, obj: &str, json: &str) -> Scene {
-    let dir = temp_dir(tag);
-    std::fs::write(dir.join("sheet.obj"), obj).expect("write obj");
-    Scene::from_json_str(json, &dir.join("scene.json")).expect("valid test scene")
+/// (The mesh is read while the scene loads, so its folder goes when this returns.)
+fn scene_with_sheet(obj: &str, json: &str) -> Scene {
+    let dir = tempfile::tempdir().expect("temp dir");
+    std::fs::write(dir.path().join("sheet.obj"), obj).expect("write obj");
+    Scene::from_json_str(json, &dir.path().join("scene.json")).expect("valid test scene")
 }
 
 /// Mean and standard error of channel 0 over the pixels whose footprint on the floor
@@ -181,7 +167,7 @@ fn tilted_mirror_matches_camera_side() {
           {"shape": {"type": "mesh", "path": "sheet.obj"}, "material": "chrome"},
           {"shape": {"type": "quad", "center": [0, 0, 0], "normal": [0, 1, 0], "size": [8, 8]}, "material": "floor"}
         ]}"#;
-    let scene = scene_with_sheet("mirror", &obj, json);
+    let scene = scene_with_sheet(&obj, json);
     let reference = Reference::new(&scene).expect("prepares");
 
     let wi = -light;
@@ -247,7 +233,7 @@ fn tilted_glass_sheet_matches_camera_side() {
           {"shape": {"type": "mesh", "path": "sheet.obj"}, "material": "glass"},
           {"shape": {"type": "quad", "center": [0, 0, 0], "normal": [0, 1, 0], "size": [8, 8]}, "material": "floor"}
         ]}"#;
-    let scene = scene_with_sheet("glass", &obj, json);
+    let scene = scene_with_sheet(&obj, json);
     let reference = Reference::new(&scene).expect("prepares");
 
     // Snell about ns (n = 1.5), in f64.
@@ -425,7 +411,7 @@ fn coarse_glass_icosphere_converges_to_the_analytic_sphere() {
                   {"shape": {"type": "mesh", "path": "sheet.obj"}, "material": "glass"},
                   {"shape": {"type": "quad", "center": [0, 0, 0], "normal": [0, 1, 0], "size": [2000, 2000]}, "material": "floor"}
                 ]}"#;
-            let scene = scene_with_sheet("icosphere", &obj, json);
+            let scene = scene_with_sheet(&obj, json);
             let reference = Reference::new(&scene).expect("prepares");
             let (power, se) = floor_power(&reference, 1 << 17, 8);
             let d = 1.0 - power / expected;
