@@ -77,7 +77,10 @@ fn max_beams_hold_the_base_grid(p: &BeamParams) -> Result<(), String> {
 
 method_params! {
     /// Refinement of the projected grid by the split oracle (Sect. 4.2): the parameters
-    /// of `adaptive-beams` beyond [`BeamParams`] (defaults: the paper's Sect. 8).
+    /// of `adaptive-beams` beyond [`BeamParams`]. The levels are the paper's (Sect. 8:
+    /// three steps on a 16² grid); its oracle is "an empirically set-up heuristic" with
+    /// no numbers given, so the thresholds are set where the built-ins at the paper's
+    /// 1024×768 use Table 1's 492–5,300 beams (`bench/experiments/liktor-table1.json`).
     pub struct Refinement {
         /// refinement levels of the projected grid (bound: the counters of levels 0..=4)
         levels: u32 = 3 => closed(0.0, MAX_LEVELS as f64);
@@ -89,14 +92,16 @@ method_params! {
         split_depth_slope: f64 = 4.0 => above(0.0, 1e3);
         /// edge-midpoint photon hits off the linear prediction by more than this (camera px) split (Sect. 6; bound: an image side)
         split_hit_px: f64 = 1.0 => above(0.0, 16384.0);
+        /// ... and by more than this fraction of the edge's landing length (a beam spreads its flux evenly, while the true irradiance varies across it by about 8x this fraction), 0 = the pixel bound alone (tuned at 1024x768 with split_camera_px for the paper's beam counts; bound: the whole edge)
+        split_hit_rel: f64 = 0.3 => closed(0.0, 1.0);
         /// split beams that carry much light or focus it (Sect. 4.2)
         split_energy: bool = true;
-        /// split while flux share x A(0)/A(where seen) exceeds this (the receiver; the narrowest point in a medium; bound: share <= 1 times the largest max_focus)
+        /// split while the beam's flux relative to an unrefined beam's (path throughput x 4^-level) times A(0)/A(where seen) exceeds this (the receiver; the narrowest point in a medium; bound: relative flux <= 1 times the largest max_focus)
         split_energy_threshold: f64 = 2.0 => above(0.0, 1e6);
         /// split beams that look large from the camera (Sect. 4.2)
         split_camera: bool = true;
-        /// split while the beam base spans more than this many pixels (bound: an image side)
-        split_camera_px: f64 = 16.0 => above(0.0, 16384.0);
+        /// split while the beam base spans more than this many pixels where its central ray passes closest to the eye (a quarter of a 1024-pixel image; bound: an image side)
+        split_camera_px: f64 = 256.0 => above(0.0, 16384.0);
     }
 }
 

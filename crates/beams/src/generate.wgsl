@@ -217,8 +217,13 @@ fn split_reasons(c: Candidate, k: Corners, level: u32) -> u32 {
         return reasons;
     }
     // Photon-hit differences (Sect. 6): where the light of an edge midpoint lands
-    // against the beam's linear prediction (the mean of the corners' landings), in
-    // camera pixels. Catches the caustic curves a beam cannot represent linearly.
+    // against the beam's linear prediction (the mean of the corners' landings). A beam
+    // spreads its flux evenly over its caustic triangle, so a midpoint off by δ on an
+    // edge of length L misplaces O(δ/L) of the beam's irradiance inside it: the split
+    // asks for δ beyond split_hit_px camera pixels (where the light lands) and beyond
+    // split_hit_rel·L (what a relative error sees). Large beams that bend gently keep
+    // their level; small ones that focus, where δ/L grows, are split (the paper's
+    // "convergent beams ... are refined with higher priority", Sect. 4.2).
     if (u.split_flags & SPLIT_DISCONTINUITY) != 0u && reasons == 0u {
         let uv = array<vec2<f32>, 3>(c.uv01.xy, c.uv01.zw, c.uv2_level.xy);
         for (var i = 0u; i < 3u; i++) {
@@ -233,7 +238,8 @@ fn split_reasons(c: Candidate, k: Corners, level: u32) -> u32 {
             let land_m = m.origin + m.dir * m.t_end;
             let deviation = distance(land_m, 0.5 * (land_i + land_j));
             let dist = max(distance(land_m, frame.eye.xyz), 1e-6);
-            if deviation > u.split_hit_px * dist * u.pixel_angle {
+            let edge = distance(land_i, land_j);
+            if deviation > max(u.split_hit_px * dist * u.pixel_angle, u.split_hit_rel * edge) {
                 reasons |= SPLIT_DISCONTINUITY;
                 break;
             }
@@ -252,10 +258,12 @@ fn split_reasons(c: Candidate, k: Corners, level: u32) -> u32 {
             a_seen = min_abs_area(g.a, max(max(ends.x, ends.y), ends.z));
         }
         let focus = a0 / max(a_seen, a0 / u.max_focus);
+        // The beam's flux relative to an unrefined beam's: its path's throughput (the
+        // corners' weight over the light's) times its area share, 4^-level.
         let mean_w = (k.p[0].weight + k.p[1].weight + k.p[2].weight) / 3.0;
-        let share = luminance(mean_w) / max(luminance(u.light_power.xyz), 1e-20)
+        let relative_flux = luminance(mean_w) / max(luminance(u.light_power.xyz), 1e-20)
             * exp2(-2.0 * f32(level));
-        if share * focus > u.split_energy {
+        if relative_flux * focus > u.split_energy {
             reasons |= SPLIT_ENERGY;
         }
     }

@@ -57,7 +57,7 @@ pub(crate) struct BeamUniforms {
     split_hit_px: f32,
     bounces: u32,
     exact_trace: u32,
-    _pad: u32,
+    split_hit_rel: f32,
 }
 
 /// Mirrors `FilterUniforms` in filter.wgsl.
@@ -265,7 +265,7 @@ impl BeamUniforms {
             split_hit_px: r.split_hit_px as f32,
             bounces: b.bounces,
             exact_trace: u32::from(b.tracer == Tracer::Bvh),
-            _pad: 0,
+            split_hit_rel: r.split_hit_rel as f32,
         }
     }
 }
@@ -319,6 +319,7 @@ mod tests {
                 split_hit_px,
                 bounces,
                 exact_trace,
+                split_hit_rel,
             }
         );
         assert_wgsl_layout!(

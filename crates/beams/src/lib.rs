@@ -28,10 +28,13 @@
 //!   instead of a geometry shader with stream-out, so the same beams land in the same
 //!   slots every frame (and the additive image is bit-identical frame to frame);
 //! - the split oracle's discontinuity criterion also traces the three edge midpoints
-//!   and splits where their light lands more than `split_hit_px` camera pixels off
-//!   the linear prediction (the "photon hit differences" of Sect. 6, used at every
-//!   level); the energy criterion is (flux share) × A(0)/A(y) where the beam is seen
-//!   (at its receiver; at its narrowest in a medium);
+//!   and splits where their light lands more than `split_hit_px` camera pixels and
+//!   more than `split_hit_rel` of the edge's landing length off the linear prediction
+//!   (the "photon hit differences" of Sect. 6, used at every level; the relative bound
+//!   is the share of its irradiance a beam misplaces, so gently bending large beams
+//!   stay whole); the energy criterion is the beam's flux relative to an unrefined
+//!   beam's × A(0)/A(y) where the beam is seen (at its receiver; at its narrowest in a
+//!   medium);
 //! - all distance impostors (one per specular object, one of the diffuse receivers
 //!   around the generators) share one texture atlas, so each query is one inlined
 //!   search (WGSL inlines every call);
@@ -58,7 +61,6 @@
 //!   analytic shapes (`caustics_gpu::triangle_bvh`), with the adjoint shading-normal
 //!   factor at each event (Veach 1997, §5.3) as the reference; the light G-buffer and
 //!   impostor passes are then not recorded.
-
 //!
 //! Passes (names `<method>/<pass>`): `light_gbuffer`, `impostors`, `generate` (compute:
 //! `init_grid`, then per level `decide`, `scan`, `emit`, `advance`, then `finalize`),

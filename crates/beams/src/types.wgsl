@@ -67,7 +67,8 @@ struct BeamUniforms {
     // 1: exact tracing through the scene's BVH and analytic shapes (`tracer` = bvh),
     // 0: the light G-buffer and distance impostors (the paper's).
     exact_trace: u32,
-    pad1: u32,
+    // ... and that fraction of the landing edge's length too (relative; 0 = off).
+    split_hit_rel: f32,
 }
 
 // A triangle of the projected grid in the light's uv space.
