@@ -60,11 +60,20 @@ fn git(args: &[&str]) -> Option<String> {
         .then(|| String::from_utf8_lossy(&out.stdout).trim().to_owned())
 }
 
-/// The commit and dirtiness of the source tree, read at run time.
+/// The commit and dirtiness of the source tree, read at run time. Changes under
+/// `results/` do not make a build dirty: they are what runs write, not what they run
+/// (a reproduction committed beside others would otherwise call itself dirty).
 pub fn build() -> Build {
     let commit = git(&["rev-parse", "HEAD"]).unwrap_or_else(|| "unknown".into());
-    let dirty =
-        git(&["status", "--porcelain", "--untracked-files=no"]).is_some_and(|s| !s.is_empty());
+    let dirty = git(&[
+        "status",
+        "--porcelain",
+        "--untracked-files=no",
+        "--",
+        ":(top)",
+        ":(top,exclude)results",
+    ])
+    .is_some_and(|s| !s.is_empty());
     Build {
         commit,
         dirty,
