@@ -145,7 +145,12 @@ fn fs_beam(in: VsOut) -> BeamOut {
             let x = eye + tm * r;
             let y = dot(x - b.v[0].xyz, n);
             var bc = max(beam_barycentrics(b, x, y), vec3<f32>(0.0));
-            bc /= max(bc.x + bc.y + bc.z, 1e-12);
+            let bc_sum = bc.x + bc.y + bc.z;
+            // Near a focus the cross-section degenerates and the barycentrics of a
+            // point on the segment can all come out negative: the centroid stands in
+            // (a zero bc would make dp zero and normalize(dp) NaN, seen with prism
+            // hulls on fog_sphere at 1024x768).
+            bc = select(vec3<f32>(1.0 / 3.0), bc / bc_sum, bc_sum > 0.0);
             let dp = bc.x * b.d[0].xyz + bc.y * b.d[1].xyz + bc.z * b.d[2].xyz;
             let d = normalize(dp);
             // Irradiance perpendicular to the rays: (Φ/A) / (d·n) = (Φ/A)·|dp|.
