@@ -92,7 +92,7 @@ method_params! {
         split_depth_slope: f64 = 4.0 => above(0.0, 1e3);
         /// edge-midpoint photon hits off the linear prediction by more than this (camera px) split (Sect. 6; bound: an image side)
         split_hit_px: f64 = 1.0 => above(0.0, 16384.0);
-        /// ... and by more than this fraction of the edge's landing length (a beam spreads its flux evenly, while the true irradiance varies across it by about 8x this fraction), 0 = the pixel bound alone (tuned at 1024x768 with split_camera_px for the paper's beam counts; bound: the whole edge)
+        /// edge-midpoint photon hits split only when also off by more than this fraction of the edge's landing length (a beam spreads its flux evenly, while the true irradiance varies across it by about 8x this fraction); 0 = the pixel bound alone (tuned at 1024x768 with split_camera_px for the paper's beam counts; bound: the whole edge)
         split_hit_rel: f64 = 0.3 => closed(0.0, 1.0);
         /// split beams that carry much light or focus it (Sect. 4.2)
         split_energy: bool = true;
