@@ -123,9 +123,9 @@ fn tight_hulls_shade_fewer_fragments_than_prisms_for_the_same_image() {
 /// adapter and build, so the bound is checked at the paper's full resolution
 /// (lavapipe: sphere_on_plane 4,834, sphere_over_water 4,848, water_pool 4,715, ring
 /// 1,898, two_lenses 1,469, glass_cushion 2,609). Not here, as measured there:
-/// bumpy_glass (about 12,250: its bumps ask for the last level everywhere, as the
-/// paper's skull does, Sect. 8), fog_sphere (about 32,000: every beam through the
-/// focus in the medium reaches `max_focus` and splits on energy) and light_leak
+/// bumpy_glass (12,125: its bumps ask for the last level everywhere, as the paper's
+/// skull does, Sect. 8), fog_sphere (31,444: every beam through the focus in the
+/// medium reaches `max_focus` and splits on energy) and light_leak
 /// (6,547: the ball focuses onto the table, and the table's edge parts beams between
 /// two receivers).
 #[test]
