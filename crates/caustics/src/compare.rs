@@ -4,8 +4,11 @@
 //! `reproduce` outputs, two `caustics run --out` folders or a baseline and a new run all
 //! compare). For each pair:
 //!
-//! - **inputs**: scene content hash, resolution, method and parameters must be equal,
-//!   else the pair is not comparable (a regression: the baseline no longer says anything);
+//! - **inputs**: scene (name and content hash), resolution, method, parameters and adapter
+//!   (name and driver) must be equal, else the pair is *not comparable*: nothing else of
+//!   it is compared, the line says which inputs differ, and `compare` exits with
+//!   [`EXIT_NOT_COMPARABLE`] (unless a comparable pair regressed). `--across-adapters`
+//!   compares runs of different adapters anyway (counts and errors gated, timings shown);
 //! - **deterministic figures** (fragment-shader invocations and primitives per pass, the
 //!   fill counts, the method's counters): equal, or within `--count-tolerance` (relative);
 //! - **errors** against the reference, of the surface and, the same way, of the volume
@@ -29,6 +32,12 @@
 //!   shown, never gated; `--no-timings` shows them without gating (CI on shared CPUs).
 //!
 //! A run of BASE missing from NEW is a regression; a run only in NEW is listed as new.
+//! The table shows what changed, run by run (`--verbose`: every comparison); `--wide`
+//! gives one flat row per comparison with the test behind each verdict (tolerances,
+//! p-values).
+//!
+//! Exit codes: 0 nothing regressed, [`EXIT_REGRESSION`] a regression, [`EXIT_NOT_COMPARABLE`]
+//! no regression but some pair not comparable, 1 an error (a bad folder or flag).
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -66,7 +75,21 @@ pub struct CompareArgs {
     /// Print every comparison, not only the changed ones.
     #[arg(long, short)]
     pub verbose: bool,
+    /// One flat row per comparison, with the test behind each verdict (tolerances,
+    /// p-values); the default groups rows by run and leaves the tests out.
+    #[arg(long)]
+    pub wide: bool,
+    /// Compare runs made on different adapters (counts and errors gated, timings shown
+    /// only); by default such pairs are not comparable.
+    #[arg(long)]
+    pub across_adapters: bool,
 }
+
+/// Exit code of `compare` when a comparable pair regressed (1 is an error).
+pub const EXIT_REGRESSION: u8 = 2;
+/// Exit code of `compare` when no pair regressed but some pair is not comparable (its
+/// scene, resolution, method, parameters or adapter differ).
+pub const EXIT_NOT_COMPARABLE: u8 = 3;
 
 /// What a comparison found.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
@@ -79,7 +102,9 @@ pub enum Verdict {
     Info,
     /// Only in NEW.
     New,
-    /// A regression: slower, worse, a changed count, missing, not comparable.
+    /// The two runs were made from different inputs: nothing of them is compared.
+    NotComparable,
+    /// A regression: slower, worse, a changed count, missing.
     Regression,
 }
 
@@ -90,6 +115,7 @@ impl Verdict {
             Verdict::Better => "better",
             Verdict::Info => "changed (not gated)",
             Verdict::New => "new",
+            Verdict::NotComparable => "NOT COMPARABLE",
             Verdict::Regression => "REGRESSION",
         }
     }
@@ -106,8 +132,10 @@ pub struct Line {
     pub base: String,
     /// New value, formatted.
     pub new: String,
-    /// Change and test, formatted.
+    /// Change, formatted.
     pub change: String,
+    /// The test behind the verdict (tolerance, p-value), shown with `--wide`.
+    pub detail: String,
     /// The verdict.
     pub verdict: Verdict,
 }
@@ -130,8 +158,37 @@ impl Report {
             .count()
     }
 
-    /// The table (changed lines only unless `all`), then a one-line verdict.
+    /// Number of pairs that are not comparable.
+    pub fn not_comparable(&self) -> usize {
+        self.lines
+            .iter()
+            .filter(|l| l.verdict == Verdict::NotComparable)
+            .count()
+    }
+
+    /// The process exit code (see the module docs).
+    pub fn exit_code(&self) -> u8 {
+        if self.regressions() > 0 {
+            EXIT_REGRESSION
+        } else if self.not_comparable() > 0 {
+            EXIT_NOT_COMPARABLE
+        } else {
+            0
+        }
+    }
+
+    /// The compact table (changed lines only unless `all`), grouped by run, then a
+    /// one-line verdict.
     pub fn table(&self, all: bool) -> String {
+        self.render(all, false)
+    }
+
+    /// The wide table: one row per comparison with its test (`--wide`).
+    pub fn wide_table(&self, all: bool) -> String {
+        self.render(all, true)
+    }
+
+    fn render(&self, all: bool, wide: bool) -> String {
         let rows: Vec<&Line> = self
             .lines
             .iter()
@@ -141,10 +198,10 @@ impl Report {
         if !rows.is_empty() {
             let w = |f: fn(&Line) -> &str, h: &str| {
                 rows.iter()
-                    .map(|l| f(l).len())
+                    .map(|l| f(l).chars().count())
                     .max()
                     .unwrap_or(0)
-                    .max(h.len())
+                    .max(h.chars().count())
             };
             let (a, b, c, d, e) = (
                 w(|l| &l.run, "run"),
@@ -153,26 +210,50 @@ impl Report {
                 w(|l| &l.new, "new"),
                 w(|l| &l.change, "change"),
             );
-            out += &format!(
-                "{:a$}  {:b$}  {:>c$}  {:>d$}  {:e$}  verdict\n",
-                "run", "measure", "base", "new", "change"
-            );
-            for l in rows {
+            if wide {
                 out += &format!(
-                    "{:a$}  {:b$}  {:>c$}  {:>d$}  {:e$}  {}\n",
-                    l.run,
-                    l.measure,
-                    l.base,
-                    l.new,
-                    l.change,
-                    l.verdict.word()
+                    "{:a$}  {:b$}  {:>c$}  {:>d$}  {:e$}  {:14}  test\n",
+                    "run", "measure", "base", "new", "change", "verdict"
                 );
+                for l in &rows {
+                    out += &format!(
+                        "{:a$}  {:b$}  {:>c$}  {:>d$}  {:e$}  {:14}  {}\n",
+                        l.run,
+                        l.measure,
+                        l.base,
+                        l.new,
+                        l.change,
+                        l.verdict.word(),
+                        l.detail
+                    );
+                }
+            } else {
+                out += &format!(
+                    "  {:b$}  {:>c$}  {:>d$}  {:e$}  verdict\n",
+                    "measure", "base", "new", "change"
+                );
+                let mut run = None;
+                for l in &rows {
+                    if run != Some(&l.run) {
+                        out += &format!("{}\n", l.run);
+                        run = Some(&l.run);
+                    }
+                    out += &format!(
+                        "  {:b$}  {:>c$}  {:>d$}  {:e$}  {}\n",
+                        l.measure,
+                        l.base,
+                        l.new,
+                        l.change,
+                        l.verdict.word()
+                    );
+                }
             }
         }
         let count = |v: Verdict| self.lines.iter().filter(|l| l.verdict == v).count();
         out += &format!(
-            "{} runs compared: {} regressions, {} better, {} changed but not gated, {} new, {} unchanged\n",
+            "{} runs paired ({} not comparable): {} regressions, {} better, {} changed but not gated, {} new, {} unchanged\n",
             self.runs,
+            count(Verdict::NotComparable),
             count(Verdict::Regression),
             count(Verdict::Better),
             count(Verdict::Info),
@@ -300,31 +381,73 @@ fn line(run: &str, measure: &str, base: &str, new: &str, change: &str, verdict: 
         base: base.into(),
         new: new.into(),
         change: change.into(),
+        detail: String::new(),
         verdict,
     }
 }
 
-fn compare_run(key: &str, b: &RunResult, n: &RunResult, args: &CompareArgs, out: &mut Vec<Line>) {
-    let inputs = |r: &RunResult| {
-        format!(
-            "{} {} {}x{} {} {}",
-            r.scene.name,
-            r.scene.hash,
-            r.scene.width,
-            r.scene.height,
-            r.method.name,
-            r.method.params
-        )
+/// The inputs of two runs that differ, as (what, base, new); empty when comparable.
+fn differing_inputs(
+    b: &RunResult,
+    n: &RunResult,
+    across_adapters: bool,
+) -> Vec<(&'static str, String, String)> {
+    let mut out = Vec::new();
+    let mut check = |what: &'static str, x: String, y: String| {
+        if x != y {
+            out.push((what, x, y));
+        }
     };
-    if inputs(b) != inputs(n) {
-        out.push(line(
+    check("scene", b.scene.name.clone(), n.scene.name.clone());
+    check(
+        "resolution",
+        format!("{}x{}", b.scene.width, b.scene.height),
+        format!("{}x{}", n.scene.width, n.scene.height),
+    );
+    // The hash covers the camera too, so another resolution changes it as well.
+    check(
+        "scene content hash",
+        b.scene.hash.clone(),
+        n.scene.hash.clone(),
+    );
+    check("method", b.method.name.clone(), n.method.name.clone());
+    check(
+        "parameters",
+        b.method.params.to_string(),
+        n.method.params.to_string(),
+    );
+    if !across_adapters {
+        let adapter = |r: &RunResult| format!("{} ({})", r.machine.adapter, r.machine.driver_info);
+        check("adapter", adapter(b), adapter(n));
+    }
+    out
+}
+
+fn compare_run(key: &str, b: &RunResult, n: &RunResult, args: &CompareArgs, out: &mut Vec<Line>) {
+    let differ = differing_inputs(b, n, args.across_adapters);
+    if !differ.is_empty() {
+        let what: Vec<&str> = differ.iter().map(|d| d.0).collect();
+        let side = |base: bool| {
+            differ
+                .iter()
+                .map(|d| if base { d.1.as_str() } else { d.2.as_str() })
+                .collect::<Vec<_>>()
+                .join("; ")
+        };
+        let mut l = line(
             key,
             "inputs",
-            &inputs(b),
-            &inputs(n),
-            "scene, size, method or parameters differ",
-            Verdict::Regression,
-        ));
+            &side(true),
+            &side(false),
+            &format!("{} differ", what.join(", ")),
+            Verdict::NotComparable,
+        );
+        l.detail = if what.contains(&"adapter") {
+            "made from different inputs: nothing of the pair is compared (--across-adapters compares runs of two adapters)".into()
+        } else {
+            "made from different inputs: nothing of the pair is compared".into()
+        };
+        out.push(l);
         return;
     }
     // Deterministic counts.
@@ -371,14 +494,12 @@ fn compare_run(key: &str, b: &RunResult, n: &RunResult, args: &CompareArgs, out:
                         100.0 * (y as f64 - x as f64) / (x as f64).max(1.0)
                     )
                 };
-                out.push(line(
-                    key,
-                    k,
-                    &x.to_string(),
-                    &y.to_string(),
-                    &change,
-                    verdict,
-                ));
+                let mut l = line(key, k, &x.to_string(), &y.to_string(), &change, verdict);
+                l.detail = format!(
+                    "deterministic: allowed ±{}% (--count-tolerance)",
+                    crate::summary::num(100.0 * args.count_tolerance)
+                );
+                out.push(l);
             }
             (x, y) => out.push(line(
                 key,
@@ -391,7 +512,9 @@ fn compare_run(key: &str, b: &RunResult, n: &RunResult, args: &CompareArgs, out:
         }
     }
     compare_errors(key, b, n, args, out);
-    let adapters_differ = b.machine.adapter != n.machine.adapter;
+    // Only with --across-adapters do runs of two adapters get this far.
+    let adapters_differ =
+        b.machine.adapter != n.machine.adapter || b.machine.driver_info != n.machine.driver_info;
     let timing = |r: &RunResult, which: &str| -> Option<Summary> {
         match which {
             "method GPU ms" => r.timing.method_gpu_ms.clone(),
@@ -625,7 +748,7 @@ fn compare_figures(
                 continue;
             }
         };
-        let (verdict, change) = match gate {
+        let (verdict, change, detail) = match gate {
             Gate::Flux => {
                 let d = y - x;
                 let verdict = if !y.is_finite() && x.is_finite() {
@@ -640,13 +763,13 @@ fn compare_figures(
                 let change = if x == y {
                     String::new()
                 } else {
-                    format!(
-                        "{:+.4} (allowed ±{}, ideal 1)",
-                        d,
-                        crate::summary::num(args.error_tolerance)
-                    )
+                    format!("{d:+.4}")
                 };
-                (verdict, change)
+                let detail = format!(
+                    "allowed ±{} (absolute), ideal 1",
+                    crate::summary::num(args.error_tolerance)
+                );
+                (verdict, change, detail)
             }
             Gate::Relative | Gate::RmseLike => {
                 let allowed = (args.error_tolerance * x.abs()).max(if gate == Gate::RmseLike {
@@ -664,23 +787,22 @@ fn compare_figures(
                 let change = if x == y {
                     String::new()
                 } else {
-                    format!(
-                        "{:+.2}% (allowed ±{})",
-                        100.0 * (y - x) / x.abs().max(1e-300),
-                        crate::summary::num(allowed)
-                    )
+                    format!("{:+.2}%", 100.0 * (y - x) / x.abs().max(1e-300))
                 };
-                (verdict, change)
+                let detail = format!("allowed ±{}", crate::summary::num(allowed));
+                (verdict, change, detail)
             }
         };
-        out.push(line(
+        let mut l = line(
             key,
             &measure,
             &crate::summary::num(x),
             &crate::summary::num(y),
             &change,
             verdict,
-        ));
+        );
+        l.detail = detail;
+        out.push(l);
     }
 }
 
@@ -708,12 +830,14 @@ pub fn compare_timing(key: &str, name: &str, b: &Summary, n: &Summary, args: &Co
         };
         (v, "p10/p90 ranges (no per-frame samples)".to_owned())
     };
-    line(
+    let mut l = line(
         key,
         name,
         &format!("{:.3}", b.median),
         &format!("{:.3}", n.median),
-        &format!("{:+.1}%, {test}", 100.0 * (ratio - 1.0)),
+        &format!("{:+.1}%", 100.0 * (ratio - 1.0)),
         verdict,
-    )
+    );
+    l.detail = format!("{test}, threshold {:.0}%", 100.0 * args.time_threshold);
+    l
 }

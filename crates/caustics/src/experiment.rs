@@ -390,7 +390,8 @@ pub fn parse_shard(s: &str) -> Result<(usize, usize)> {
     Ok((k, n))
 }
 
-fn fnv_hex(bytes: &[u8]) -> String {
+/// FNV-1a 64 of `bytes`, 16 hex digits.
+pub(crate) fn fnv_hex(bytes: &[u8]) -> String {
     let mut h: u64 = 0xcbf2_9ce4_8422_2325;
     for &b in bytes {
         h ^= u64::from(b);

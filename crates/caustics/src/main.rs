@@ -36,14 +36,13 @@ enum Command {
     Reproduce(ReproduceArgs),
     /// Merge the output folders of `reproduce --shard k/n` into one.
     Merge(MergeArgs),
-    /// Compare two result folders run by run; exit 2 on a regression.
+    /// Compare two result folders run by run; exit 2 on a regression, 3 when no pair
+    /// regressed but some pair is not comparable (other scene, resolution, method,
+    /// parameters or adapter).
     Compare(CompareArgs),
     /// Write a static HTML report (index.html + images) of reproduced experiments.
     Report(ReportArgs),
 }
-
-/// Exit code of `compare` when it finds a regression (1 is an error).
-const EXIT_REGRESSION: u8 = 2;
 
 fn list() {
     println!("scenes ({}):", caustics_scene::builtin_dir().display());
@@ -70,7 +69,38 @@ fn list() {
     }
 }
 
+/// Mesa's Vulkan device-select layer (an implicit layer of every Mesa install) asks the
+/// Wayland compositor for the default GPU; where there is no `XDG_RUNTIME_DIR` (a
+/// headless machine, CI, ssh) libwayland prints "error: XDG_RUNTIME_DIR is invalid or not
+/// set in the environment." twice, which reads as a failure of the run. The layer only
+/// reorders adapters, and `--adapter` / `CAUSTICS_ADAPTER` pick ours by name, so there the
+/// process replaces itself (exec: same process id, same arguments) with the layer's own
+/// off switch, `NODEVICE_SELECT=1`, set. Setting it in-process would need `unsafe`
+/// (`std::env::set_var`), which the workspace forbids.
+#[cfg(unix)]
+fn quiet_mesa_device_select() {
+    use std::os::unix::process::CommandExt;
+    let runtime_dir_ok =
+        std::env::var_os("XDG_RUNTIME_DIR").is_some_and(|d| std::path::Path::new(&d).is_dir());
+    if runtime_dir_ok || std::env::var_os("NODEVICE_SELECT").is_some() {
+        return;
+    }
+    let Ok(exe) = std::env::current_exe() else {
+        return;
+    };
+    // `exec` returns only when it failed (e.g. the binary was rebuilt under us): then the
+    // run goes on, with the warning.
+    let _ = std::process::Command::new(exe)
+        .args(std::env::args_os().skip(1))
+        .env("NODEVICE_SELECT", "1")
+        .exec();
+}
+
+#[cfg(not(unix))]
+fn quiet_mesa_device_select() {}
+
 fn main() -> ExitCode {
+    quiet_mesa_device_select();
     let cli = Cli::parse();
     let outcome: Result<ExitCode> = match cli.command {
         Command::List => {
@@ -93,12 +123,12 @@ fn main() -> ExitCode {
             ExitCode::SUCCESS
         }),
         Command::Compare(args) => caustics::compare::compare(&args).map(|r| {
-            print!("{}", r.table(args.verbose));
-            if r.regressions() > 0 {
-                ExitCode::from(EXIT_REGRESSION)
+            if args.wide {
+                print!("{}", r.wide_table(args.verbose));
             } else {
-                ExitCode::SUCCESS
+                print!("{}", r.table(args.verbose));
             }
+            ExitCode::from(r.exit_code())
         }),
         Command::Report(args) => caustics::report::report(&args).map(|index| {
             println!("report: {}", index.display());

@@ -62,6 +62,17 @@ impl CachedReference {
     pub fn caustic(&self) -> PathBuf {
         self.dir.join("caustic.exr")
     }
+    /// The surface caustic image as result files name it: its path inside the cache,
+    /// `<scene>/<hash>-<width>x<height>-t<version>/caustic.exr` (the key says what it
+    /// was made from; the cache's own location is the machine's business).
+    pub fn caustic_key(&self) -> String {
+        let part = |p: Option<&std::ffi::OsStr>| {
+            p.map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_default()
+        };
+        let scene = part(self.dir.parent().and_then(Path::file_name));
+        format!("{scene}/{}/caustic.exr", part(self.dir.file_name()))
+    }
     /// Its per-pixel standard error.
     pub fn stderr(&self) -> PathBuf {
         self.dir.join("stderr.exr")

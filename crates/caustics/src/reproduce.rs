@@ -74,6 +74,12 @@ pub struct ReproduceArgs {
     /// reproduction resumes). The reference cache is not touched.
     #[arg(long, conflicts_with = "summary_only")]
     pub fresh: bool,
+    /// Write runs into a committed folder (e.g. `results/reproduce`) from a source tree
+    /// with uncommitted changes outside `results/`; refused by default, since the files
+    /// would name a commit they were not made from (they record `dirty` and the diff's
+    /// hash).
+    #[arg(long)]
+    pub allow_dirty: bool,
 }
 
 /// Bumped when a field of the manifest or summary changes meaning.
@@ -194,11 +200,29 @@ pub fn reproduce(args: &ReproduceArgs) -> Result<Outcome> {
             outcome.dirs.push(out);
             continue;
         }
+        refuse_dirty_into_committed(&out, args.allow_dirty)?;
         let failed = reproduce_one(e, args, shard.unwrap_or((1, 1)), &out)?;
         outcome.failed += failed;
         outcome.dirs.push(out);
     }
     Ok(outcome)
+}
+
+/// Runs made from uncommitted code into a folder git would commit are refused unless
+/// asked for (`--allow-dirty`).
+fn refuse_dirty_into_committed(out: &Path, allow_dirty: bool) -> Result<()> {
+    if allow_dirty || !crate::machine::is_committed_path(out) {
+        return Ok(());
+    }
+    let build = crate::machine::build();
+    if build.dirty {
+        bail!(
+            "{}: a committed results folder, but the source tree has uncommitted changes outside results/ (see `git status`): its runs would name commit {} without being made from it. Commit first, write elsewhere (--out target/...), or pass --allow-dirty (the files then record dirty and the diff's hash)",
+            out.display(),
+            build.commit
+        );
+    }
+    Ok(())
 }
 
 fn reproduce_one(
@@ -262,7 +286,7 @@ fn reproduce_one(
             reference: crate::references::find(&args.references, &spec.scene)
                 .ok()
                 .flatten()
-                .map(|c| c.caustic().display().to_string()),
+                .map(|c| c.caustic_key()),
             build: &build,
             cpu: &cpu,
             adapter: adapter.as_deref(),

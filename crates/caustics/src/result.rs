@@ -89,7 +89,8 @@ pub struct ScoringInfo {
 pub struct SceneInfo {
     /// Scene name.
     pub name: String,
-    /// Scene file.
+    /// Scene file: relative to the checkout (`scenes/ring.json`) when inside it, else
+    /// as given ([`crate::machine::portable_path`]).
     pub file: String,
     /// Content hash of the scene file and its meshes.
     pub hash: String,
@@ -216,7 +217,9 @@ pub struct ToneMapInfo {
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ErrorReport {
-    /// The reference surface caustic image.
+    /// The reference surface caustic image: from the cache, its path inside the cache
+    /// (`<scene>/<hash>-<width>x<height>-t<version>/caustic.exr`); from `--reference`,
+    /// relative to the checkout when inside it, else as given.
     pub reference: String,
     /// Where it came from: "--reference" or "cache".
     pub reference_source: String,

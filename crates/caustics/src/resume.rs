@@ -184,16 +184,18 @@ fn stale_reason(dir: &Path, r: &RunResult, x: &Expected<'_>) -> Option<String> {
         .or_else(|| differs("errors.reference", errors_ref, x.reference.as_deref()))
         .or_else(|| {
             differs(
-                "build (commit, dirty, version, profile)",
+                "build (commit, dirty, diff hash, version, profile)",
                 (
                     &r.build.commit,
                     r.build.dirty,
+                    &r.build.diff_hash,
                     &r.build.version,
                     &r.build.profile,
                 ),
                 (
                     &x.build.commit,
                     x.build.dirty,
+                    &x.build.diff_hash,
                     &x.build.version,
                     &x.build.profile,
                 ),

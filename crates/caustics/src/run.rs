@@ -321,7 +321,7 @@ pub fn run_scene(o: &RunOptions, scene: Scene) -> Result<RunOutcome> {
                     _ => None,
                 };
                 Ok(ErrorReport {
-                    reference: r.path.display().to_string(),
+                    reference: r.name.clone(),
                     reference_source: r.source.to_owned(),
                     surface: caustics_metrics::all_errors(surface, &r.surface, &tone)?,
                     volume: volume_errors,
@@ -352,7 +352,7 @@ pub fn run_scene(o: &RunOptions, scene: Scene) -> Result<RunOutcome> {
         machine: machine::machine(&ctx.summary),
         scene: SceneInfo {
             name: scene.name.clone(),
-            file: scene.source.display().to_string(),
+            file: machine::portable_path(&scene.source),
             hash: scene.hash_hex(),
             width: w,
             height: h,
@@ -427,6 +427,8 @@ fn write_error_maps(
 /// The reference images a run scores against.
 struct LoadedReference {
     path: PathBuf,
+    /// How `result.json` names it (`ErrorReport::reference`).
+    name: String,
     source: &'static str,
     surface: HdrImage,
     volume: Option<HdrImage>,
@@ -454,6 +456,7 @@ fn load_reference(o: &RunOptions, scene: &Scene, volume: bool) -> Result<Option<
         let surface = read_reference_image(p, scene)?;
         return Ok(Some(LoadedReference {
             path: p.clone(),
+            name: machine::portable_path(p),
             source: "--reference",
             surface,
             volume: None,
@@ -475,6 +478,7 @@ fn load_reference(o: &RunOptions, scene: &Scene, volume: bool) -> Result<Option<
     };
     Ok(Some(LoadedReference {
         path: cached.caustic(),
+        name: cached.caustic_key(),
         source: "cache",
         surface,
         volume,

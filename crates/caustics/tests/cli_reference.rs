@@ -117,6 +117,13 @@ fn a_rendered_reference_is_cached_and_used_by_run() {
     )
     .expect("json");
     assert_eq!(result["errors"]["reference_source"], "cache");
+    // Named by its place in the cache, not by this machine's absolute path.
+    let reference = result["errors"]["reference"].as_str().expect("reference");
+    assert!(
+        reference.starts_with("water_pool/") && reference.ends_with("/caustic.exr"),
+        "{reference}"
+    );
+    assert!(!reference.contains(refs_s), "{reference}");
     assert!(result["errors"]["surface"]["rmse"].as_f64().expect("rmse") > 0.0);
     assert!(
         out.join("water_pool")

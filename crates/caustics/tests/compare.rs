@@ -126,6 +126,8 @@ fn args(base: &Path, new: &Path) -> CompareArgs {
         noise_k: 0.5,
         no_timings: false,
         verbose: false,
+        wide: false,
+        across_adapters: false,
     }
 }
 
@@ -441,11 +443,92 @@ fn missing_runs_changed_inputs_and_new_runs() {
     let r = compare(&args(&b, &n)).expect("compare");
     assert_eq!(r.regressions(), 1, "{}", r.table(true));
     assert!(r.lines.iter().any(|l| l.verdict == Verdict::New));
-    // Same run, other parameters: not comparable.
+    // Same run, other parameters: not comparable, not a regression.
     let mut other = base.clone();
     other["method"]["params"] = serde_json::json!({"grid": 64});
     let (_t, a) = pair(&base, &other);
-    assert_eq!(regressions_in(&a), vec!["inputs".to_owned()]);
+    assert!(regressions_in(&a).is_empty());
+    let r = compare(&a).expect("compare");
+    assert_eq!(r.not_comparable(), 1, "{}", r.table(true));
+    assert_eq!(r.exit_code(), caustics::compare::EXIT_NOT_COMPARABLE);
+}
+
+/// The README's old example: a baseline at 96×72 against a reproduction at half scale.
+/// Every pair is "not comparable" (exit 3, saying which inputs differ), never a list of
+/// regressions; nothing else of such a pair is compared.
+#[test]
+fn runs_at_other_resolutions_or_adapters_are_not_comparable() {
+    let base = template();
+    let mut half = base.clone();
+    half["scene"]["width"] = (base["scene"]["width"].as_u64().expect("w") / 2).into();
+    half["scene"]["height"] = (base["scene"]["height"].as_u64().expect("h") / 2).into();
+    half["fragments"]["method_total"] = 1.into();
+    set_times(&mut half, 10.0, 0.25);
+    let (_t, a) = pair(&base, &half);
+    let r = compare(&a).expect("compare");
+    assert_eq!(r.regressions(), 0, "{}", r.table(true));
+    assert_eq!(r.lines.len(), 1, "{}", r.table(true));
+    let l = &r.lines[0];
+    assert_eq!(l.verdict, Verdict::NotComparable);
+    assert!(l.change.contains("resolution"), "{}", l.change);
+    assert!(
+        l.base.contains(&format!("{}x", base["scene"]["width"])),
+        "{}",
+        l.base
+    );
+    let (code, stdout) = exit_code(&a);
+    assert_eq!(code, Some(3), "{stdout}");
+    assert!(stdout.contains("NOT COMPARABLE"), "{stdout}");
+    assert!(stdout.contains("resolution"), "{stdout}");
+    // Compact: grouped by run, no line wider than the measures need.
+    assert!(stdout.lines().all(|l| l.chars().count() < 120), "{stdout}");
+
+    // A missing run of BASE still regresses, whatever else is not comparable.
+    let mut more = base.clone();
+    more["scene"]["name"] = "ring".into();
+    let d = a.base.join("runs/default/ring/wavefront");
+    std::fs::create_dir_all(&d).expect("mkdir");
+    std::fs::write(d.join("result.json"), more.to_string()).expect("write");
+    assert_eq!(exit_code(&a).0, Some(2));
+
+    // Another adapter (or driver): not comparable unless asked; with --across-adapters
+    // counts and errors are gated and timings only shown.
+    let mut other = base.clone();
+    other["machine"]["adapter"] = "NVIDIA H200".into();
+    set_times(&mut other, 10.0, 0.2);
+    let (_t, a) = pair(&base, &other);
+    let r = compare(&a).expect("compare");
+    assert_eq!(r.not_comparable(), 1, "{}", r.table(true));
+    assert!(
+        r.lines[0].change.contains("adapter"),
+        "{}",
+        r.lines[0].change
+    );
+    let r = compare(&CompareArgs {
+        across_adapters: true,
+        ..a.clone()
+    })
+    .expect("compare");
+    assert_eq!(r.not_comparable() + r.regressions(), 0, "{}", r.table(true));
+    assert!(r.lines.len() > 10, "{}", r.table(true));
+    let timing = r
+        .lines
+        .iter()
+        .find(|l| l.measure == "method GPU ms")
+        .expect("timing line");
+    assert_eq!(timing.verdict, Verdict::Info);
+    assert!(
+        timing.change.contains("different adapters"),
+        "{}",
+        timing.change
+    );
+    // The wide table carries each verdict's test.
+    assert!(
+        r.wide_table(true).contains("Mann-Whitney"),
+        "{}",
+        r.wide_table(true)
+    );
+    assert!(!r.table(true).contains("Mann-Whitney"), "{}", r.table(true));
 }
 
 fn listing(root: &Path) -> Vec<(String, Vec<u8>)> {

@@ -409,6 +409,7 @@ fn mutated_experiment_result_manifest_and_summary_files_never_panic_and_name_the
         keep_exr: false,
         summary_only: false,
         fresh: false,
+        allow_dirty: false,
     })
     .expect("seed reproduction");
     assert_eq!(out.failed, 0);
@@ -520,6 +521,8 @@ fn mutated_experiment_result_manifest_and_summary_files_never_panic_and_name_the
                     noise_k: 0.5,
                     no_timings: false,
                     verbose: true,
+                    wide: false,
+                    across_adapters: false,
                 })
                 .map(|r| {
                     let _ = r.table(true);

@@ -48,6 +48,7 @@ fn args(tmp: &Path, exp: &Path, out: &str, shard: Option<&str>) -> ReproduceArgs
         keep_exr: false,
         summary_only: false,
         fresh: false,
+        allow_dirty: false,
     }
 }
 
@@ -225,6 +226,8 @@ fn reproduce_then_shards_merged_equal_the_unsharded_run() {
         noise_k: 0.0,
         no_timings: true,
         verbose: false,
+        wide: false,
+        across_adapters: false,
     })
     .expect("compare");
     assert_eq!(report.regressions(), 0, "{}", report.table(true));
