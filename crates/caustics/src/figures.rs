@@ -17,7 +17,9 @@ use crate::figure_spec::{
     Column, Defaults, Figure, Key, Kind, Measure, RunInfo, distinguishing, grid, labels, pairs,
     value_text,
 };
-use crate::plots::{GUIDE, INK, PALETTE, Series, Style, colour, finish, plot_err, scatter};
+use crate::plots::{
+    GUIDE, INK, PALETTE, Plot, Scale, Series, Style, colour, finish, plot_err, scale_for, scatter,
+};
 use crate::summary::{Row, Summary, num};
 
 /// One declared figure as drawn.
@@ -115,10 +117,18 @@ pub fn draw(
             continue;
         }
         let png = fig_dir.join(format!("{}.png", f.name));
+        let rows: Vec<&Row> = runs.iter().map(|r| r.0).collect();
+        let caption = crate::plots::caption(s, &rows);
         let drew = match &f.kind {
-            Kind::ImageGrid { .. } => image_grid(dir, e, f, &runs, references, &png, &mut d)?,
-            Kind::Line { .. } => line(f, &runs, &done, &png, &mut d)?,
-            Kind::Ratio { .. } => ratio(f, &runs, &png, &mut d)?,
+            Kind::ImageGrid { .. } => {
+                let place = Place {
+                    png: &png,
+                    caption: &caption,
+                };
+                image_grid(dir, e, f, &runs, references, &place, &mut d)?
+            }
+            Kind::Line { .. } => line(f, &runs, &done, &png, &caption, &mut d)?,
+            Kind::Ratio { .. } => ratio(f, &runs, &png, &caption, &mut d)?,
             Kind::Table { columns } => {
                 d.table = Some(table(columns, &runs));
                 false
@@ -164,15 +174,22 @@ fn enlarge(img: &Rgb8Image, k: u32) -> Rgb8Image {
     out
 }
 
+/// Where a figure goes and what stands under it.
+struct Place<'a> {
+    png: &'a Path,
+    caption: &'a str,
+}
+
 fn image_grid(
     dir: &Path,
     e: &Experiment,
     f: &Figure,
     runs: &[&(&Row, RunInfo)],
     references: &Path,
-    png: &Path,
+    place: &Place<'_>,
     d: &mut DrawnFigure,
 ) -> Result<bool> {
+    let png = place.png;
     let Kind::ImageGrid {
         rows,
         cols,
@@ -243,17 +260,17 @@ fn image_grid(
     // Small runs (a 64x48 quick pass) are enlarged so that a caustic can be seen.
     let k = (192 / w0).clamp(1, 8);
     let (cw, ch) = (w0 * k, h0 * k);
-    let label_h = 12;
     let gap = 6;
     let row_w = g.rows.iter().map(|l| text_width(l)).max().unwrap_or(0);
     let row_w = if row_w > 0 { row_w + 10 } else { 0 };
-    let cell_w = images
-        .values()
-        .map(|(l, _)| text_width(l))
-        .max()
-        .unwrap_or(0)
-        .max(cw)
-        + gap;
+    // Cell labels wrap at spaces to the image's width (a long parameter set takes lines,
+    // not the width of the figure).
+    let cell_w = cw + gap;
+    let wrapped: BTreeMap<(usize, usize), Vec<String>> = images
+        .iter()
+        .map(|(k, (l, _))| (*k, crate::plots::wrap(l, cw)))
+        .collect();
+    let label_h = wrapped.values().map(Vec::len).max().unwrap_or(1) as u32 * crate::plots::LINE_H;
     let cell_h = ch + label_h + gap;
     let title_h = 20;
     let width = (8 + row_w + total_cols as u32 * cell_w + 8).max(text_width(&f.title) + 16);
@@ -264,11 +281,20 @@ fn image_grid(
         let y0 = title_h + row as u32 * cell_h;
         draw_text(&mut img, 8, y0 + label_h + ch / 2, label, INK);
         for col in 0..total_cols {
-            let Some((label, tile)) = images.get(&(row, col)) else {
+            let Some((_, tile)) = images.get(&(row, col)) else {
                 continue;
             };
             let x0 = 8 + row_w + col as u32 * cell_w;
-            draw_text(&mut img, x0, y0 + 2, label, INK);
+            let lines = wrapped.get(&(row, col)).map_or(&[][..], Vec::as_slice);
+            for (k, line) in lines.iter().enumerate() {
+                draw_text(
+                    &mut img,
+                    x0,
+                    y0 + 2 + k as u32 * crate::plots::LINE_H,
+                    line,
+                    INK,
+                );
+            }
             let tile = match tile {
                 Some(t) => enlarge(t, k),
                 None => placeholder(cw, ch, "missing"),
@@ -281,7 +307,7 @@ fn image_grid(
         }
     }
     std::fs::create_dir_all(png.parent().unwrap_or(Path::new(".")))?;
-    caustics_metrics::write_png(png, &img)?;
+    caustics_metrics::write_png(png, &crate::plots::with_caption(&img, place.caption))?;
     let layout = match &g.cols {
         Some(c) => format!(
             "rows: {}; columns: {}{}",
@@ -320,6 +346,7 @@ fn line(
     runs: &[&(&Row, RunInfo)],
     all: &[(&Row, RunInfo)],
     png: &Path,
+    caption: &str,
     d: &mut DrawnFigure,
 ) -> Result<bool> {
     let Kind::Line {
@@ -441,7 +468,31 @@ fn line(
         y.to_string()
     };
     std::fs::create_dir_all(png.parent().unwrap_or(Path::new(".")))?;
-    scatter(png, &f.title, &x.to_string(), &y_label, &drawn)?;
+    let (x_name, y_name) = (x.to_string(), y.to_string());
+    let xs: Vec<f64> = drawn
+        .iter()
+        .flat_map(|d| d.points.iter().map(|p| p.0))
+        .collect();
+    let ys: Vec<f64> = drawn
+        .iter()
+        .flat_map(|d| d.points.iter().map(|p| p.1))
+        .collect();
+    // A quotient of two runs' figures is a ratio whatever it divides: linear.
+    let y_scale = if base.is_some() {
+        Scale::Linear
+    } else {
+        scale_for(&y_name, &ys)
+    };
+    scatter(
+        png,
+        &Plot {
+            title: &f.title,
+            caption,
+            x: (&x_name, scale_for(&x_name, &xs)),
+            y: (&y_label, y_scale),
+        },
+        &drawn,
+    )?;
     Ok(true)
 }
 
@@ -466,7 +517,13 @@ pub fn least_squares(p: &[(f64, f64)]) -> Option<(f64, f64, f64)> {
     Some((my - b * mx, b, r2))
 }
 
-fn ratio(f: &Figure, runs: &[&(&Row, RunInfo)], png: &Path, d: &mut DrawnFigure) -> Result<bool> {
+fn ratio(
+    f: &Figure,
+    runs: &[&(&Row, RunInfo)],
+    png: &Path,
+    caption: &str,
+    d: &mut DrawnFigure,
+) -> Result<bool> {
     let Kind::Ratio {
         of,
         numerator,
@@ -539,7 +596,7 @@ fn ratio(f: &Figure, runs: &[&(&Row, RunInfo)], png: &Path, d: &mut DrawnFigure)
     if bars.is_empty() {
         return Ok(false);
     }
-    ratio_bars(png, &f.title, &bars)?;
+    ratio_bars(png, &f.title, &bars, caption)?;
     Ok(true)
 }
 
@@ -554,7 +611,12 @@ fn ratio_text(q: f64) -> String {
 
 /// Horizontal bars of ratios about a centre line at 1, log scale (a ratio of 2 and one
 /// of ½ are bars of one length), each with its value.
-fn ratio_bars(path: &Path, title: &str, bars: &[(String, f64, [u8; 3])]) -> Result<()> {
+fn ratio_bars(
+    path: &Path,
+    title: &str,
+    bars: &[(String, f64, [u8; 3])],
+    caption: &str,
+) -> Result<()> {
     let bar_h = 12i32;
     let label_w = bars
         .iter()
@@ -591,14 +653,14 @@ fn ratio_bars(path: &Path, title: &str, bars: &[(String, f64, [u8; 3])]) -> Resu
                 colour(*c).filled(),
             ))
             .map_err(plot_err)?;
-            text.push((8, y + 3, label.clone(), false));
+            text.push((8, y + 2, label.clone(), false));
             let v = ratio_text(*q);
             let tx = if len >= 0 {
                 x1 + 4
             } else {
                 x0 - 4 - text_width(&v) as i32
             };
-            text.push((tx, y + 3, v, false));
+            text.push((tx, y + 2, v, false));
         }
         let bottom = top + bars.len() as i32 * (bar_h + 4);
         root.draw(&PathElement::new(
@@ -624,7 +686,7 @@ fn ratio_bars(path: &Path, title: &str, bars: &[(String, f64, [u8; 3])]) -> Resu
         root.present().map_err(plot_err)?;
     }
     std::fs::create_dir_all(path.parent().unwrap_or(Path::new(".")))?;
-    finish(buf, w, h, &text, path)
+    finish(buf, w, h, &text, caption, path)
 }
 
 /// A number in a table: counts as integers, others as [`num`] writes them.
@@ -896,7 +958,12 @@ mod tests {
             i.set(0, 0, [0.5; 3]);
             i
         });
-        let (xr, _) = find(grey.get(0, 0)).expect("the reference column");
+        // A block of it, not an anti-aliased text pixel of the same grey.
+        let c = grey.get(0, 0);
+        let (xr, _) = (1..img.height - 1)
+            .flat_map(|y| (1..img.width - 1).map(move |x| (x, y)))
+            .find(|&(x, y)| (0..3).all(|d| (0..3).all(|e| img.get(x + d - 1, y + e - 1) == c)))
+            .expect("the reference column");
         assert!(xr > x6 + 127, "the reference is the last column");
         assert!(
             g.notes.iter().any(|n| n.contains("enlarged 8x")),

@@ -1,6 +1,10 @@
-//! Plots of a summary, drawn with `plotters` on its bitmap backend (no system fonts:
-//! plotters is built without a text feature and every label is drawn with the metrics
-//! crate's embedded 5×7 font), written as PNG:
+//! Plots of a summary, drawn with `plotters` on its bitmap backend, written as PNG. Every
+//! label is drawn with the metrics crate's text (DejaVu Sans, embedded, rasterized by
+//! `ab_glyph`, the crate behind plotters' own `ab_glyph` text feature): our layouts
+//! measure text before placing it, so text is drawn by us after plotters has drawn the
+//! shapes, never from system fonts. Each axis' scale is fixed by what it shows
+//! ([`scale_for`]: times, relMSE and counts log; FLIP and ratios linear), and every plot
+//! carries a caption with the adapter, resolution and build ([`caption`]):
 //!
 //! - `<y>_vs_time_<scene>.png`: an error of the pixel-averaged scoring frame against the
 //!   method's GPU time, one colour per method, with the Pareto front (runs no other run
@@ -17,7 +21,7 @@ use std::path::Path;
 
 use anyhow::{Result, anyhow};
 use caustics_metrics::{
-    HeatmapOptions, Rgb8Image, draw_text, draw_text_vertical, heatmap_with, text_width,
+    GLYPH_H, HeatmapOptions, Rgb8Image, draw_text, draw_text_vertical, heatmap_with, text_width,
 };
 use plotters::prelude::*;
 
@@ -38,6 +42,50 @@ const GRID: [u8; 3] = [225, 225, 225];
 /// Colour of fits and reference lines.
 pub(crate) const GUIDE: [u8; 3] = [120, 120, 120];
 
+/// How an axis maps its values. Fixed by what the axis shows ([`scale_for`]), never by
+/// the data's range, so every plot of one kind in an experiment reads the same way.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Scale {
+    /// Linear.
+    Linear,
+    /// log10: values <= 0 cannot be shown and are left out.
+    Log,
+}
+
+/// The scale of an axis that shows `name` (a measure, `counter:<name>`, `param:<name>`,
+/// or an axis label) with the values `values`: times, relMSE/RMSE-like errors and counts
+/// span decades between methods and go log; FLIP, flux and other ratios live near [0, 2]
+/// and stay linear; anything else (a parameter) goes log when its values are all positive
+/// and grow geometrically (a sweep 1, 2, 4 … 32), else linear.
+pub(crate) fn scale_for(name: &str, values: &[f64]) -> Scale {
+    let n = name.to_ascii_lowercase();
+    let has = |k: &str| n.contains(k);
+    if has("flip") || has("flux") || has("ratio") || has("the baseline") || has("share") {
+        return Scale::Linear;
+    }
+    let decades = [
+        "gpu ms",
+        "_ms",
+        "time",
+        "relmse",
+        "rel_mse",
+        "rmse",
+        "fragments",
+        "beams",
+        "photons",
+        "triangles",
+        "samples",
+    ];
+    if !n.starts_with("param:") && (n.starts_with("counter:") || decades.iter().any(|k| has(k))) {
+        return Scale::Log;
+    }
+    let mut v: Vec<f64> = values.iter().copied().filter(|v| v.is_finite()).collect();
+    v.sort_by(f64::total_cmp);
+    v.dedup();
+    let geometric = v.len() >= 3 && v[0] > 0.0 && v.windows(2).all(|w| w[1] / w[0] >= 1.9);
+    if geometric { Scale::Log } else { Scale::Linear }
+}
+
 /// An axis: value range, linear or log10.
 #[derive(Clone, Copy, Debug)]
 struct Axis {
@@ -47,16 +95,33 @@ struct Axis {
 }
 
 impl Axis {
-    /// Fits values (all finite; positive ones only on a log axis), padded by 5%.
-    fn fit(values: &[f64]) -> Axis {
-        let (mut lo, mut hi) = values
+    /// Fits values (finite ones; positive ones only on a log axis), padded by 5%. A log
+    /// axis without a positive value falls back to linear.
+    fn fit(values: &[f64], scale: Scale) -> Axis {
+        let shown: Vec<f64> = values
+            .iter()
+            .copied()
+            .filter(|v| v.is_finite() && (scale == Scale::Linear || *v > 0.0))
+            .collect();
+        if scale == Scale::Log && shown.is_empty() {
+            return Axis::fit(values, Scale::Linear);
+        }
+        let (mut lo, mut hi) = shown
             .iter()
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
                 (a.min(v), b.max(v))
             });
-        let log = lo > 0.0 && hi / lo > 20.0;
+        if !lo.is_finite() {
+            (lo, hi) = (0.0, 1.0);
+        }
+        let log = scale == Scale::Log;
         if log {
-            let (l, h) = (lo.log10(), hi.log10());
+            let (mut l, mut h) = (lo.log10(), hi.log10());
+            if h - l < 0.3 {
+                // Less than a factor of 2: widen to one around the middle.
+                let mid = 0.5 * (l + h);
+                (l, h) = (mid - 0.15, mid + 0.15);
+            }
             let pad = 0.05 * (h - l);
             return Axis {
                 lo: 10f64.powf(l - pad),
@@ -93,18 +158,33 @@ impl Axis {
                 self.lo.log10().floor() as i32,
                 self.hi.log10().ceil() as i32,
             );
-            let per_decade: &[f64] = if b - a <= 2 { &[1.0, 2.0, 5.0] } else { &[1.0] };
-            for e in a..=b {
-                for m in per_decade {
-                    let v = m * 10f64.powi(e);
-                    if v >= self.lo && v <= self.hi {
-                        t.push(v);
+            // Decades; 1-2-5 within two decades; every digit when even that gives < 3.
+            let every: &[f64] = &[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0];
+            for per_decade in [&[1.0][..], &[1.0, 2.0, 5.0], every] {
+                if per_decade.len() == 1 && b - a <= 2 {
+                    continue;
+                }
+                t.clear();
+                for e in a..=b {
+                    for m in per_decade {
+                        let v = m * 10f64.powi(e);
+                        if v >= self.lo && v <= self.hi {
+                            t.push(v);
+                        }
                     }
                 }
+                if t.len() >= 3 {
+                    return t;
+                }
             }
-            return t;
+            // Under a factor of about 3: plain ticks inside the range.
+            return self.linear_ticks((self.hi - self.lo) / 4.0);
         }
-        let raw = (self.hi - self.lo) / 5.0;
+        self.linear_ticks((self.hi - self.lo) / 5.0)
+    }
+
+    /// Ticks of a linear axis about `raw` apart, on 1-2-5 steps.
+    fn linear_ticks(&self, raw: f64) -> Vec<f64> {
         let mag = 10f64.powf(raw.log10().floor());
         let step = [1.0, 2.0, 5.0, 10.0]
             .iter()
@@ -121,21 +201,44 @@ impl Axis {
     }
 }
 
-/// A tick value with at most 4 significant digits and no trailing zeros.
+/// A tick value with at most 4 significant digits and no trailing zeros; outside
+/// [0.001, 100000) as `m·10ⁿ` (`10ⁿ` when m = 1) with a true superscript, and negative
+/// values with a true minus sign.
 fn tick_label(v: f64) -> String {
     if v == 0.0 {
         return "0".into();
     }
-    if v.abs() >= 1e5 || v.abs() < 1e-3 {
-        return format!("{v:.1e}");
-    }
-    let decimals = (3 - v.abs().log10().floor() as i32).max(0) as usize;
-    let s = format!("{v:.decimals$}");
-    if s.contains('.') {
-        s.trim_end_matches('0').trim_end_matches('.').to_owned()
+    let text = if v.abs() >= 1e5 || v.abs() < 1e-3 {
+        let mut e = v.abs().log10().floor() as i32;
+        let mut m = v.abs() / 10f64.powi(e);
+        if m >= 9.995 {
+            (m, e) = (m / 10.0, e + 1);
+        }
+        let sup: String = e
+            .to_string()
+            .chars()
+            .map(|c| match c.to_digit(10) {
+                Some(d) => ['⁰', '¹', '²', '³', '⁴', '⁵', '⁶', '⁷', '⁸', '⁹'][d as usize],
+                None => '⁻',
+            })
+            .collect();
+        let mantissa = format!("{m:.2}");
+        let mantissa = mantissa.trim_end_matches('0').trim_end_matches('.');
+        if mantissa == "1" {
+            format!("10{sup}")
+        } else {
+            format!("{mantissa}·10{sup}")
+        }
     } else {
-        s
-    }
+        let decimals = (3 - v.abs().log10().floor() as i32).max(0) as usize;
+        let s = format!("{:.decimals$}", v.abs());
+        if s.contains('.') {
+            s.trim_end_matches('0').trim_end_matches('.').to_owned()
+        } else {
+            s
+        }
+    };
+    if v < 0.0 { format!("−{text}") } else { text }
 }
 
 pub(crate) fn colour(c: [u8; 3]) -> RGBColor {
@@ -189,7 +292,64 @@ impl Series {
 /// Text to draw after plotters is done: (x, y, text, vertical).
 pub(crate) type Labels = Vec<(i32, i32, String, bool)>;
 
-pub(crate) fn finish(buf: Vec<u8>, w: u32, h: u32, labels: &Labels, path: &Path) -> Result<()> {
+/// Rows under every plot and figure for its caption.
+pub(crate) const CAPTION_H: u32 = 16;
+
+/// The caption of a plot of `rows`: the adapter(s), the resolution(s), the build (profile
+/// and commit) they were made with, so a figure read apart from its summary still says
+/// what it measured on.
+pub(crate) fn caption(s: &Summary, rows: &[&Row]) -> String {
+    let mut sizes: Vec<String> = Vec::new();
+    for r in rows {
+        let size = format!("{}×{}", r.width, r.height);
+        if !sizes.contains(&size) {
+            sizes.push(size);
+        }
+    }
+    let commits: Vec<String> = s
+        .commits
+        .iter()
+        .map(|c| c.chars().take(10).collect())
+        .collect();
+    let mut parts = vec![if s.adapters.is_empty() {
+        "adapter not recorded".to_owned()
+    } else {
+        s.adapters.join(", ")
+    }];
+    if !sizes.is_empty() {
+        parts.push(sizes.join(", "));
+    }
+    if !s.profiles.is_empty() {
+        parts.push(format!("{} build", s.profiles.join("/")));
+    }
+    if !commits.is_empty() {
+        parts.push(format!("commit {}", commits.join(", ")));
+    }
+    parts.join(" · ")
+}
+
+/// Copies `src` onto a white image `CAPTION_H` rows taller and writes `caption` in grey
+/// along the bottom.
+pub(crate) fn with_caption(src: &Rgb8Image, caption: &str) -> Rgb8Image {
+    let width = src.width.max(text_width(caption) + 16);
+    let mut img = Rgb8Image::filled(width, src.height + CAPTION_H, [255; 3]);
+    for y in 0..src.height {
+        for x in 0..src.width {
+            img.set(x, y, src.get(x, y));
+        }
+    }
+    draw_text(&mut img, 8, src.height + 3, caption, GUIDE);
+    img
+}
+
+pub(crate) fn finish(
+    buf: Vec<u8>,
+    w: u32,
+    h: u32,
+    labels: &Labels,
+    caption: &str,
+    path: &Path,
+) -> Result<()> {
     let mut img = Rgb8Image {
         width: w,
         height: h,
@@ -203,23 +363,35 @@ pub(crate) fn finish(buf: Vec<u8>, w: u32, h: u32, labels: &Labels, path: &Path)
             draw_text(&mut img, x, y, text, INK);
         }
     }
-    caustics_metrics::write_png(path, &img)?;
+    caustics_metrics::write_png(path, &with_caption(&img, caption))?;
     Ok(())
 }
 
-/// A scatter plot with axes, ticks, labels, legend. An axis whose values span more than
-/// 20× goes log10; points a log axis cannot show (≤ 0) are left out.
-pub(crate) fn scatter(
-    path: &Path,
-    title: &str,
-    x_label: &str,
-    y_label: &str,
-    series: &[Series],
-) -> Result<()> {
-    let (w, h) = (720u32, 420u32);
+/// What a scatter plot shows, besides its series.
+pub(crate) struct Plot<'a> {
+    /// Over the plot.
+    pub(crate) title: &'a str,
+    /// Under it ([`caption`]).
+    pub(crate) caption: &'a str,
+    /// The x axis' label and scale.
+    pub(crate) x: (&'a str, Scale),
+    /// The y axis' label and scale.
+    pub(crate) y: (&'a str, Scale),
+}
+
+/// A scatter plot with axes, ticks, labels, a legend as wide as its longest entry and a
+/// caption. Points a log axis cannot show (≤ 0) are left out.
+pub(crate) fn scatter(path: &Path, plot: &Plot<'_>, series: &[Series]) -> Result<()> {
+    let legend_w = series
+        .iter()
+        .map(|s| text_width(&s.name) as i32)
+        .max()
+        .unwrap_or(0);
+    let margin_right = (legend_w + 40).max(120);
+    let (w, h) = ((510 + margin_right) as u32, 420u32);
     let all: Vec<(f64, f64)> = series.iter().flat_map(|s| s.points.clone()).collect();
-    let xa = Axis::fit(&all.iter().map(|p| p.0).collect::<Vec<_>>());
-    let ya = Axis::fit(&all.iter().map(|p| p.1).collect::<Vec<_>>());
+    let xa = Axis::fit(&all.iter().map(|p| p.0).collect::<Vec<_>>(), plot.x.1);
+    let ya = Axis::fit(&all.iter().map(|p| p.1).collect::<Vec<_>>(), plot.y.1);
     let mut buf = vec![255u8; (w * h * 3) as usize];
     let mut labels: Labels = Vec::new();
     {
@@ -227,7 +399,7 @@ pub(crate) fn scatter(
         root.fill(&WHITE).map_err(plot_err)?;
         let mut chart = ChartBuilder::on(&root)
             .margin_top(28)
-            .margin_right(210)
+            .margin_right(margin_right)
             .margin_left(70)
             .margin_bottom(40)
             .build_cartesian_2d(xa.range(), ya.range())
@@ -249,7 +421,12 @@ pub(crate) fn scatter(
                 .map_err(plot_err)?;
             let (px, py) = chart.backend_coord(&(xr.start, y));
             let s = tick_label(t);
-            labels.push((px - 6 - text_width(&s) as i32, py - 3, s, false));
+            labels.push((
+                px - 6 - text_width(&s) as i32,
+                py - GLYPH_H as i32 / 2,
+                s,
+                false,
+            ));
         }
         let frame = [
             (xr.start, yr.start),
@@ -303,7 +480,7 @@ pub(crate) fn scatter(
                 }
             }
             // Legend entry in the right margin.
-            let (lx, ly) = (w as i32 - 200, 36 + 14 * i as i32);
+            let (lx, ly) = (w as i32 - margin_right + 10, 36 + 15 * i as i32);
             let legend_h = if s.style == Style::Points { 8 } else { 2 };
             let legend_w = if s.style == Style::Dashed { 4 } else { 10 };
             for dx in [0, 6]
@@ -316,26 +493,26 @@ pub(crate) fn scatter(
                 ))
                 .map_err(plot_err)?;
             }
-            labels.push((lx + 16, ly, s.name.clone(), false));
+            labels.push((lx + 16, ly - 3, s.name.clone(), false));
         }
         root.present().map_err(plot_err)?;
     }
-    labels.push((70, 10, title.to_owned(), false));
-    let x_label = format!("{x_label}{}", if xa.log { " (log)" } else { "" });
+    labels.push((70, 10, plot.title.to_owned(), false));
+    let x_label = format!("{}{}", plot.x.0, if xa.log { " (log)" } else { "" });
     labels.push((
-        70 + (w as i32 - 280) / 2 - text_width(&x_label) as i32 / 2,
-        h as i32 - 14,
+        70 + (w as i32 - 70 - margin_right) / 2 - text_width(&x_label) as i32 / 2,
+        h as i32 - 16,
         x_label,
         false,
     ));
-    let y_label = format!("{y_label}{}", if ya.log { " (log)" } else { "" });
+    let y_label = format!("{}{}", plot.y.0, if ya.log { " (log)" } else { "" });
     labels.push((
-        8,
+        6,
         h as i32 / 2 + text_width(&y_label) as i32 / 2,
         y_label,
         true,
     ));
-    finish(buf, w, h, &labels, path)
+    finish(buf, w, h, &labels, plot.caption, path)
 }
 
 /// The runs not beaten in both time and error by another run, sorted by time.
@@ -364,7 +541,12 @@ pub(crate) fn file_safe(s: &str) -> String {
 }
 
 /// Horizontal bars of the method's fragments, one per run.
-fn fragments_plot(path: &Path, rows: &[(&Row, u64)], methods: &[String]) -> Result<()> {
+fn fragments_plot(
+    path: &Path,
+    rows: &[(&Row, u64)],
+    methods: &[String],
+    caption: &str,
+) -> Result<()> {
     let bar_h = 12i32;
     let label_w = rows
         .iter()
@@ -397,49 +579,86 @@ fn fragments_plot(path: &Path, rows: &[(&Row, u64)], methods: &[String]) -> Resu
                 colour(PALETTE[m % PALETTE.len()]).filled(),
             ))
             .map_err(plot_err)?;
-            labels.push((8, y + 3, bar_label(r), false));
-            labels.push((label_w + len + 4, y + 3, num(*f as f64), false));
+            labels.push((8, y + 2, bar_label(r), false));
+            labels.push((label_w + len + 4, y + 2, num(*f as f64), false));
         }
         root.present().map_err(plot_err)?;
     }
-    finish(buf, w, h, &labels, path)
+    finish(buf, w, h, &labels, caption, path)
 }
 
-/// Images in a grid (up to 4 a row), each under its label, on white.
-fn tile(path: &Path, title: &str, tiles: &[(String, Rgb8Image)]) -> Result<()> {
+/// `text` broken at spaces into lines of at most `max_w` pixels (a word longer than that
+/// stands alone on its line).
+pub(crate) fn wrap(text: &str, max_w: u32) -> Vec<String> {
+    let mut lines: Vec<String> = Vec::new();
+    for word in text.split(' ').filter(|w| !w.is_empty()) {
+        match lines.last_mut() {
+            Some(l) if text_width(&format!("{l} {word}")) <= max_w => {
+                l.push(' ');
+                l.push_str(word);
+            }
+            _ => lines.push(word.to_owned()),
+        }
+    }
+    if lines.is_empty() {
+        lines.push(String::new());
+    }
+    lines
+}
+
+/// Rows of one line of label text.
+pub(crate) const LINE_H: u32 = GLYPH_H + caustics_metrics::DESCENT + 3;
+
+/// Images in a grid (up to 4 a row), each under its label (wrapped to the image's
+/// width), on white, with a caption.
+fn tile(path: &Path, title: &str, tiles: &[(String, Rgb8Image)], caption: &str) -> Result<()> {
     let cols = tiles.len().min(4);
-    let rows = tiles.len().div_ceil(cols);
-    let label_h = 12;
-    let cell_w = tiles
+    let cell_w = tiles.iter().map(|t| t.1.width).max().unwrap_or(1) + 8;
+    let wrapped: Vec<Vec<String>> = tiles.iter().map(|t| wrap(&t.0, cell_w - 8)).collect();
+    let image_h = tiles.iter().map(|t| t.1.height).max().unwrap_or(1);
+    // Each grid row is as tall as its longest label needs.
+    let label_h: Vec<u32> = wrapped
+        .chunks(cols)
+        .map(|r| r.iter().map(Vec::len).max().unwrap_or(1) as u32 * LINE_H)
+        .collect();
+    let row_y: Vec<u32> = label_h
         .iter()
-        .map(|t| t.1.width.max(text_width(&t.0)))
-        .max()
-        .unwrap_or(1)
-        + 8;
-    let cell_h = tiles.iter().map(|t| t.1.height).max().unwrap_or(1) + label_h + 8;
+        .scan(22, |y, h| {
+            let top = *y;
+            *y += h + image_h + 8;
+            Some(top)
+        })
+        .collect();
+    let height =
+        row_y.last().copied().unwrap_or(22) + label_h.last().copied().unwrap_or(0) + image_h + 8;
     let mut img = Rgb8Image::filled(
-        cols as u32 * cell_w + 8,
-        rows as u32 * cell_h + 24,
+        (cols as u32 * cell_w + 8).max(text_width(title) + 16),
+        height,
         [255; 3],
     );
     draw_text(&mut img, 8, 6, title, INK);
-    for (i, (label, t)) in tiles.iter().enumerate() {
-        let (x0, y0) = (
-            8 + (i % cols) as u32 * cell_w,
-            20 + (i / cols) as u32 * cell_h,
-        );
-        draw_text(&mut img, x0, y0, label, INK);
+    for (i, ((_, t), lines)) in tiles.iter().zip(&wrapped).enumerate() {
+        let (x0, y0) = (8 + (i % cols) as u32 * cell_w, row_y[i / cols]);
+        for (k, line) in lines.iter().enumerate() {
+            draw_text(&mut img, x0, y0 + k as u32 * LINE_H, line, INK);
+        }
         for y in 0..t.height {
             for x in 0..t.width {
-                img.set(x0 + x, y0 + label_h + y, t.get(x, y));
+                img.set(x0 + x, y0 + label_h[i / cols] + y, t.get(x, y));
             }
         }
     }
-    caustics_metrics::write_png(path, &img)?;
+    caustics_metrics::write_png(path, &with_caption(&img, caption))?;
     Ok(())
 }
 
+/// A run by its scene, method and parameters.
 fn bar_label(r: &Row) -> String {
+    format!("{} {}", r.scene, run_label(r))
+}
+
+/// A run of a known scene by its method and parameters.
+fn run_label(r: &Row) -> String {
     let params: Vec<String> = r
         .params
         .iter()
@@ -448,7 +667,11 @@ fn bar_label(r: &Row) -> String {
             v => format!("{k}={v}"),
         })
         .collect();
-    format!("{} {} {}", r.scene, r.method, params.join(" "))
+    if params.is_empty() {
+        r.method.clone()
+    } else {
+        format!("{} {}", r.method, params.join(" "))
+    }
 }
 
 /// A y axis of the error plots: file stem, axis label, and the figure of a run.
@@ -544,11 +767,15 @@ pub fn write_plots(dir: &Path, s: &Summary) -> Result<Vec<String>> {
                 &mut written,
                 format!("{stem}_vs_time_{}.png", file_safe(scene)),
             )?;
+            let of_scene: Vec<&Row> = done.iter().copied().filter(|r| &r.scene == scene).collect();
             scatter(
                 &path,
-                &format!("{}: {scene}: error against cost", s.experiment),
-                "method GPU ms (median)",
-                label,
+                &Plot {
+                    title: &format!("{}: {scene}: error against cost", s.experiment),
+                    caption: &caption(s, &of_scene),
+                    x: ("method GPU ms (median)", Scale::Log),
+                    y: (label, scale_for(label, &[])),
+                },
                 &series,
             )?;
         }
@@ -608,11 +835,18 @@ pub fn write_plots(dir: &Path, s: &Summary) -> Result<Vec<String>> {
                     &mut written,
                     format!("{stem}_vs_{}_{}.png", file_safe(name), file_safe(scene)),
                 )?;
+                let xs: Vec<f64> = series
+                    .iter()
+                    .flat_map(|l| l.points.iter().map(|p| p.0))
+                    .collect();
                 scatter(
                     &path,
-                    &format!("{}: {scene}: error against {name}", s.experiment),
-                    name,
-                    label,
+                    &Plot {
+                        title: &format!("{}: {scene}: error against {name}", s.experiment),
+                        caption: &caption(s, &runs),
+                        x: (name, scale_for(&format!("param:{name}"), &xs)),
+                        y: (label, scale_for(label, &[])),
+                    },
                     &series,
                 )?;
             }
@@ -628,7 +862,7 @@ pub fn write_plots(dir: &Path, s: &Summary) -> Result<Vec<String>> {
                     // Runs made before `fill_counts.png` existed have no exact counts.
                     let p = root.join(r.dir.as_ref()?).join("fill_counts.png");
                     let (counts, w, h) = caustics_metrics::read_counts_png(&p).ok()?;
-                    Some((bar_label(r), counts, w, h))
+                    Some((run_label(r), counts, w, h))
                 })
                 .collect();
             if panels.len() < 2 {
@@ -647,6 +881,8 @@ pub fn write_plots(dir: &Path, s: &Summary) -> Result<Vec<String>> {
                     })
                     .collect::<Result<Vec<_>>>()?;
                 let path = need(&mut written, format!("{name}_{}.png", file_safe(scene)))?;
+                let of_scene: Vec<&Row> =
+                    done.iter().copied().filter(|r| &r.scene == scene).collect();
                 tile(
                     &path,
                     &format!(
@@ -656,6 +892,7 @@ pub fn write_plots(dir: &Path, s: &Summary) -> Result<Vec<String>> {
                         options.max.unwrap_or(0)
                     ),
                     &tiles,
+                    &caption(s, &of_scene),
                 )?;
             }
         }
@@ -666,7 +903,7 @@ pub fn write_plots(dir: &Path, s: &Summary) -> Result<Vec<String>> {
         .collect();
     if !frags.is_empty() {
         let path = need(&mut written, "fragments.png".into())?;
-        fragments_plot(&path, &frags, &methods)?;
+        fragments_plot(&path, &frags, &methods, &caption(s, &done))?;
     }
     // plots/ is output: a plot an earlier summary drew and this one does not (an RMSE
     // plot of before, a scene no longer run) would be shown by `caustics report` as if
@@ -695,42 +932,101 @@ mod tests {
 
     #[test]
     fn ticks_are_inside_the_axis_and_round() {
-        let a = Axis::fit(&[0.0, 9.3]);
+        let a = Axis::fit(&[0.0, 9.3], Scale::Linear);
         let t = a.ticks();
         assert!(
             t.len() >= 3 && t.iter().all(|v| *v >= a.lo && *v <= a.hi),
             "{t:?}"
         );
         assert!(t.contains(&2.0) || t.contains(&5.0), "{t:?}");
-        let l = Axis::fit(&[0.01, 30.0]);
+        let l = Axis::fit(&[0.01, 30.0], Scale::Log);
         assert!(l.log);
         assert!(l.ticks().contains(&1.0));
+        // A log axis over less than a decade still gets three ticks or more.
+        let narrow = Axis::fit(&[1500.0, 3100.0], Scale::Log);
+        assert!(narrow.ticks().len() >= 3, "{:?}", narrow.ticks());
         assert_eq!(tick_label(500.0), "500");
         assert_eq!(tick_label(0.25), "0.25");
         assert_eq!(tick_label(1500.0), "1500");
+        assert_eq!(tick_label(-0.5), "−0.5");
+        assert_eq!(tick_label(1e-4), "10⁻⁴");
+        assert_eq!(tick_label(2e-4), "2·10⁻⁴");
+        assert_eq!(tick_label(3e6), "3·10⁶");
     }
 
     #[test]
-    fn a_scatter_plot_draws_points_and_text() {
+    fn axis_scales_are_fixed_by_what_the_axis_shows() {
+        // The same measure gets the same scale whatever range the data spans.
+        for values in [&[1.0, 1.1][..], &[1.0, 1000.0]] {
+            assert_eq!(scale_for("method GPU ms (median)", values), Scale::Log);
+            assert_eq!(
+                scale_for("relMSE of the surface caustic", values),
+                Scale::Log
+            );
+            assert_eq!(scale_for("counter:beams", values), Scale::Log);
+            assert_eq!(
+                scale_for("HDR-FLIP of the surface caustic", values),
+                Scale::Linear
+            );
+            assert_eq!(scale_for("flux_ratio", values), Scale::Linear);
+        }
+        // A parameter by its sweep: geometric goes log, evenly spaced stays linear.
+        assert_eq!(
+            scale_for("param:kernel_px", &[1.0, 2.0, 4.0, 8.0]),
+            Scale::Log
+        );
+        assert_eq!(
+            scale_for("param:levels", &[0.0, 1.0, 2.0, 3.0]),
+            Scale::Linear
+        );
+        assert_eq!(scale_for("param:split_hit_rel", &[0.0, 0.1]), Scale::Linear);
+        // A log axis of nothing positive falls back to linear rather than to nothing.
+        assert!(!Axis::fit(&[0.0, 0.0], Scale::Log).log);
+    }
+
+    #[test]
+    fn labels_wrap_at_spaces_to_the_width() {
+        let long = "adaptive-beams bounces=2 max_beams=262144 tracer=bvh";
+        let lines = wrap(long, 100);
+        assert!(lines.len() >= 2, "{lines:?}");
+        assert!(
+            lines
+                .iter()
+                .all(|l| text_width(l) <= 100 || !l.contains(' ')),
+            "{lines:?}"
+        );
+        assert_eq!(lines.join(" "), long);
+    }
+
+    #[test]
+    fn a_scatter_plot_draws_points_text_and_a_whole_legend() {
         let dir = tempfile::tempdir().expect("tempdir");
         let p = dir.path().join("p.png");
+        let long = "adaptive, 3 levels, the oracle's relative hit bound swept";
         scatter(
             &p,
-            "title",
-            "x",
-            "y",
-            &[Series::new(
-                "a",
-                PALETTE[0],
-                vec![(1.0, 2.0), (2.0, 1.0)],
-                Style::Points,
-            )],
+            &Plot {
+                title: "title",
+                caption: "llvmpipe · 64×48",
+                x: ("x", Scale::Linear),
+                y: ("y", Scale::Log),
+            },
+            &[
+                Series::new("a", PALETTE[0], vec![(1.0, 2.0), (2.0, 1.0)], Style::Points),
+                Series::new(long, PALETTE[1], vec![(1.0, 1.0), (2.0, 3.0)], Style::Line),
+            ],
         )
         .expect("plot");
         let img = caustics_metrics::read_png(&p).expect("png");
-        assert_eq!((img.width, img.height), (720, 420));
+        // The legend's right margin holds its longest entry; the caption adds rows.
+        assert!(img.width >= 510 + text_width(long) + 26, "{}", img.width);
+        assert_eq!(img.height, 420 + CAPTION_H);
         assert!(img.pixels.contains(&PALETTE[0]), "no point drawn");
         assert!(img.pixels.contains(&INK), "no text or frame drawn");
+        assert!(
+            (420..img.height).any(|y| (0..img.width).any(|x| img.get(x, y) != [255; 3])),
+            "no caption"
+        );
     }
 
     fn row(dir: &str, method: &str, max: u32) -> Row {
@@ -789,9 +1085,9 @@ mod tests {
         let top = inferno(1.0);
         let img =
             caustics_metrics::read_png(&tmp.path().join("plots/heatmaps_s.png")).expect("png");
-        let panel_w = 8 + caustics_metrics::COLOR_BAR_WIDTH;
-        let cell_w = panel_w.max(text_width(&bar_label(&s.runs[0]))) + 8;
-        let (a, b) = (img.get(8, 20 + 12), img.get(8 + cell_w, 20 + 12));
+        let cell_w = 8 + caustics_metrics::COLOR_BAR_WIDTH + 8;
+        let label_h = wrap(&run_label(&s.runs[0]), cell_w - 8).len() as u32 * LINE_H;
+        let (a, b) = (img.get(8, 22 + label_h), img.get(8 + cell_w, 22 + label_h));
         assert_eq!(b, top, "b's maximum tops the shared scale");
         assert_eq!(a, inferno(0.1), "a's maximum of 10 is a tenth of it");
     }

@@ -3,16 +3,20 @@
 //! vertical title.
 
 use crate::Rgb8Image;
-use crate::font::{self, GLYPH_H};
+use crate::font::{self, DESCENT, GLYPH_H};
 use crate::heatmap::{COLOR_BAR_WIDTH, MIN_MAP_HEIGHT, PANEL_BACKGROUND};
 
 pub(crate) const LABEL_COLOUR: [u8; 3] = [235, 235, 235];
 
 // Panel layout, in columns relative to the panel's left edge.
 pub(crate) const BAR_X: u32 = 6;
-pub(crate) const BAR_W: u32 = 14;
-const LABEL_X: u32 = BAR_X + BAR_W + 4;
-const TITLE_X: u32 = COLOR_BAR_WIDTH - GLYPH_H - 1;
+pub(crate) const BAR_W: u32 = 12;
+/// A tick is a short mark touching the bar's right edge; its label starts a clear gap
+/// after it, so that mark and label do not read as a minus sign.
+const TICK_W: u32 = 2;
+const LABEL_X: u32 = BAR_X + BAR_W + TICK_W + 3;
+/// The vertical title's capitals start here; its descenders end a pixel inside the panel.
+const TITLE_X: u32 = COLOR_BAR_WIDTH - GLYPH_H - DESCENT - 1;
 const MARGIN_Y: u32 = 4;
 /// Rows of an end cap (plus one row of background between cap and bar).
 pub(crate) const CAP_H: u32 = 4;
@@ -32,9 +36,14 @@ pub(crate) struct ColourBar<'a> {
 }
 
 /// Copies `area` into a wider image and draws `bar` in a [`COLOR_BAR_WIDTH`] panel on its
-/// right; the output is at least [`MIN_MAP_HEIGHT`] rows high.
+/// right; the output is at least [`MIN_MAP_HEIGHT`] rows high, and high enough for the
+/// whole title (below a small map the panel's background continues).
 pub(crate) fn with_colour_bar(area: &Rgb8Image, bar: &ColourBar<'_>) -> Rgb8Image {
-    let out_h = area.height.max(MIN_MAP_HEIGHT);
+    let title_len = font::text_width(bar.title);
+    let out_h = area
+        .height
+        .max(MIN_MAP_HEIGHT)
+        .max(title_len + 2 * MARGIN_Y + 2);
     let mut out = Rgb8Image::filled(area.width + COLOR_BAR_WIDTH, out_h, PANEL_BACKGROUND);
     for y in 0..area.height {
         for x in 0..area.width {
@@ -72,12 +81,11 @@ pub(crate) fn with_colour_bar(area: &Rgb8Image, bar: &ColourBar<'_>) -> Rgb8Imag
             continue;
         }
         drawn.push(y);
-        for x in BAR_X + BAR_W..LABEL_X - 1 {
+        for x in BAR_X + BAR_W..BAR_X + BAR_W + TICK_W {
             out.set(px + x, y_tick, LABEL_COLOUR);
         }
         font::draw_text(&mut out, px + LABEL_X, y, label, LABEL_COLOUR);
     }
-    let title_len = font::text_width(bar.title);
     let room = out_h - 2 * MARGIN_Y;
     let y_bottom = out_h - MARGIN_Y - 1 - room.saturating_sub(title_len) / 2;
     font::draw_text_vertical(&mut out, px + TITLE_X, y_bottom, bar.title, LABEL_COLOUR);

@@ -49,7 +49,7 @@ pub fn signed_error_max(test: &HdrImage, reference: &HdrImage) -> Result<f32, Me
 /// Signed error map: `Y(t) − Y(r)` per pixel (Rec. 709 luminance, W·m⁻²·sr⁻¹) on
 /// Moreland's cool-warm diverging map, symmetric about 0: `−max_abs` is blue, 0 the
 /// neutral grey [`COOL_WARM_NEUTRAL`](crate::COOL_WARM_NEUTRAL), `+max_abs` red, linear in
-/// between. A colour bar on the right is labelled in W·m⁻²·sr⁻¹ (title `t-r Y W/m2/sr`).
+/// between. A colour bar on the right is labelled in W·m⁻²·sr⁻¹ (title `test − ref, W·m⁻²·sr⁻¹`: the luminance difference).
 ///
 /// Clipping rule: a pixel with an error above `+max_abs` is drawn [`CLIP_HIGH_COLOUR`]
 /// (yellow), below `−max_abs` [`CLIP_LOW_COLOUR`] (green); the bar carries caps in those
@@ -69,7 +69,7 @@ pub fn signed_error_map(
     };
     let d = signed_differences(test, reference);
     let ticks = symmetric_ticks(|v| format_signed(f64::from(v) * f64::from(max)));
-    Ok(diverging(test, &d, max, ticks, "t-r Y W/m2/sr"))
+    Ok(diverging(test, &d, max, ticks, "test − ref, W·m⁻²·sr⁻¹"))
 }
 
 /// The floor of [`relative_error_map`]'s denominator: [`CAUSTIC_REGION_FRACTION`] (1%) of
@@ -85,7 +85,7 @@ pub fn relative_error_floor(reference: &HdrImage) -> Option<f32> {
 /// Relative error map: `(Y(t) − Y(r)) / max(Y(r), floor)` per pixel with the floor of
 /// [`relative_error_floor`], on the same diverging map and clipping rule as
 /// [`signed_error_map`], symmetric over `±max_rel` (default 1, i.e. ±100%); the colour bar
-/// is labelled in percent (title `(t-r)/r %`).
+/// is labelled in percent (title `(test − ref) / ref, %`).
 ///
 /// Fails with [`MetricsError::InvalidParameter`] for a black reference (no relative error
 /// exists) or a non-positive `max_rel`.
@@ -107,7 +107,7 @@ pub fn relative_error_map(
         .map(|(&t, &r)| (luminance(t) - luminance(r)) / luminance(r).max(floor))
         .collect();
     let ticks = symmetric_ticks(|v| format_percent(f64::from(v) * f64::from(max)));
-    Ok(diverging(test, &d, max, ticks, "(t-r)/r %"))
+    Ok(diverging(test, &d, max, ticks, "(test − ref) / ref, %"))
 }
 
 fn positive(name: &'static str, v: f32) -> Result<f32, MetricsError> {

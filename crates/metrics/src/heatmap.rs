@@ -240,7 +240,7 @@ pub fn error_map_with_max(
         &ColourBar {
             colour,
             ticks,
-            title: "|t-r| luminance",
+            title: "|test − ref|, luminance",
             caps: None,
         },
     ))

@@ -56,7 +56,7 @@ pub use crate::flip::{FLIP_PIXELS_PER_DEGREE, flip, flip_map};
 pub use crate::flux::{
     CAUSTIC_REGION_FRACTION, CAUSTIC_REGION_PERCENTILE, caustic_region, flux_ratio,
 };
-pub use crate::font::{GLYPH_H, draw_text, draw_text_vertical, text_width};
+pub use crate::font::{DESCENT, GLYPH_H, draw_text, draw_text_vertical, text_width};
 pub use crate::hdr_flip::{
     HDR_FLIP_ACES, HdrFlip, hdr_flip, hdr_flip_exposures, hdr_flip_exposures_over,
     hdr_flip_with_exposures,

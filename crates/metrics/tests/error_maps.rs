@@ -67,7 +67,7 @@ fn signed_map_tells_too_bright_from_too_dark_and_marks_clipping() -> Result<()> 
         "-5 beyond -1 is clipped and marked"
     );
     // The bar carries both clip colours as caps, red above blue.
-    let bar: Vec<[u8; 3]> = (0..40).map(|y| img.get(5 + 10, y)).collect();
+    let bar: Vec<[u8; 3]> = (0..img.height).map(|y| img.get(5 + 10, y)).collect();
     let first = |c: [u8; 3]| bar.iter().position(|&b| b == c);
     assert!(first(CLIP_HIGH_COLOUR) < first(cool_warm(1.0)));
     assert!(first(cool_warm(1.0)) < first(cool_warm(0.0)));

@@ -59,7 +59,13 @@ fn columns() -> (Vec<u32>, u32, u32) {
 fn heatmap_colours_known_counts() {
     let (counts, w, h) = columns();
     let img = heatmap(&counts, w, h, "fragments/px").expect("heatmap");
-    assert_eq!((img.width, img.height), (w + COLOR_BAR_WIDTH, h));
+    // As high as the map, or as the colour bar's title needs (the panel's background
+    // continues below a small map).
+    let title_h = caustics_metrics::text_width("fragments/px") + 10;
+    assert_eq!(
+        (img.width, img.height),
+        (w + COLOR_BAR_WIDTH, h.max(title_h))
+    );
     for y in [0, 17, 39] {
         assert_eq!(img.get(0, y), ZERO_COUNT_COLOUR, "zero count is dark");
         assert_eq!(img.get(1, y), inferno(0.25));
@@ -73,14 +79,14 @@ fn heatmap_colours_known_counts() {
 fn heatmap_has_a_colour_bar_with_labels() {
     let (counts, w, h) = columns();
     let img = heatmap(&counts, w, h, "fragments/px").expect("heatmap");
-    let panel: Vec<[u8; 3]> = (0..h)
+    let panel: Vec<[u8; 3]> = (0..img.height)
         .flat_map(|y| (w..img.width).map(move |x| (x, y)))
         .map(|(x, y)| img.get(x, y))
         .collect();
     // The panel is not a copy of the image area: it has background, bar and label pixels.
     assert!(panel.contains(&PANEL_BACKGROUND));
     let bar_x = w + 10;
-    let column: Vec<_> = (0..h).map(|y| img.get(bar_x, y)).collect();
+    let column: Vec<_> = (0..img.height).map(|y| img.get(bar_x, y)).collect();
     assert!(
         column.contains(&inferno(1.0)),
         "top of bar is the maximum colour"
@@ -91,14 +97,15 @@ fn heatmap_has_a_colour_bar_with_labels() {
     );
     // Bar runs from bright at the top to dark at the bottom.
     let lum = |p: [u8; 3]| u32::from(p[0]) + u32::from(p[1]) + u32::from(p[2]);
-    assert!(lum(column[5]) > lum(column[20]) && lum(column[20]) > lum(column[34]));
+    let at = |f: f64| column[(f * f64::from(img.height)) as usize];
+    assert!(lum(at(0.12)) > lum(at(0.5)) && lum(at(0.5)) > lum(at(0.85)));
     // Labels and title are drawn in a light colour that appears nowhere in the image area.
     let light = panel.iter().filter(|p| p.iter().all(|&c| c > 200)).count();
     assert!(light > 30, "labels missing: {light} light pixels");
     // Different labels give different panels.
     let counts2: Vec<u32> = counts.iter().map(|c| c * 1000).collect();
     let img2 = heatmap(&counts2, w, h, "fragments/px").expect("heatmap");
-    let panel2: Vec<_> = (0..h)
+    let panel2: Vec<_> = (0..img2.height)
         .flat_map(|y| (w..img2.width).map(move |x| (x, y)))
         .map(|(x, y)| img2.get(x, y))
         .collect();
@@ -144,7 +151,10 @@ fn heatmap_of_tiny_or_empty_input() {
     let img = heatmap(&[0, 0, 0, 0], 2, 2, "fragments/px").expect("heatmap");
     assert_eq!(
         (img.width, img.height),
-        (2 + COLOR_BAR_WIDTH, MIN_MAP_HEIGHT)
+        (
+            2 + COLOR_BAR_WIDTH,
+            MIN_MAP_HEIGHT.max(caustics_metrics::text_width("fragments/px") + 10)
+        )
     );
     assert_eq!(img.get(1, 1), ZERO_COUNT_COLOUR);
     assert_eq!(
