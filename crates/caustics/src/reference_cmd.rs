@@ -76,7 +76,8 @@ pub fn relative_stderr(caustic: &ReferenceImage, stderr: &ReferenceImage) -> f64
     }
 }
 
-fn progress_bar(total: Option<u64>) -> ProgressBar {
+/// A photon progress bar (of `total` photons, or of unknown length).
+pub(crate) fn progress_bar(total: Option<u64>) -> ProgressBar {
     let bar = match total {
         Some(t) => ProgressBar::new(t),
         None => ProgressBar::no_length(),

@@ -562,6 +562,8 @@ fn run_one(e: &Experiment, spec: &RunSpec, args: &ReproduceArgs, out: &Path) -> 
         exposure: e.def.exposure,
         score_grid: e.def.score_grid,
         references: args.references.clone(),
+        // The experiment's budget decides its references (`ensure_references`).
+        quick_reference_photons: 0,
     };
     let status = |status: &str, dir: Option<String>, reason: Option<String>| RunStatus {
         index: spec.index,

@@ -132,3 +132,78 @@ fn a_rendered_reference_is_cached_and_used_by_run() {
             .is_file()
     );
 }
+
+/// The README's first command on a fresh clone: no reference anywhere, and the run is
+/// still scored, against a quick seeded reference it renders into the cache and says
+/// so; the next run uses that one; `--quick-reference-photons 0` renders none.
+#[test]
+fn a_first_run_renders_a_quick_reference_and_is_scored() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let scene = small_scene(tmp.path(), "ring", 48, 36);
+    let refs = tmp.path().join("refs");
+    let out = tmp.path().join("out");
+    let run = |refs: &Path, extra: &[&str]| {
+        let mut args = vec![
+            "run",
+            "--scene",
+            &scene,
+            "--method",
+            "static-grid",
+            "--frames",
+            "1",
+            "--warmup",
+            "0",
+            "--score-grid",
+            "1",
+            "--references",
+            refs.to_str().expect("utf-8"),
+            "--out",
+            out.to_str().expect("utf-8"),
+        ];
+        args.extend_from_slice(extra);
+        let o = caustics(&args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let result: serde_json::Value = serde_json::from_slice(
+            &std::fs::read(out.join("ring/static-grid/result.json")).expect("result.json"),
+        )
+        .expect("json");
+        (stderr(&o), result)
+    };
+    let (err, result) = run(&refs, &["--quick-reference-photons", "300000"]);
+    assert!(
+        err.contains("rendering a quick one (300000 photons, seed 1)"),
+        "{err}"
+    );
+    assert!(err.contains("quick reference rendered in"), "{err}");
+    assert_eq!(result["errors"]["reference_source"], "cache");
+    assert!(
+        result["errors"]["surface"]["rel_mse"]
+            .as_f64()
+            .expect("relMSE")
+            > 0.0
+    );
+    assert!(out.join("ring/static-grid/error.png").is_file());
+    let loaded = caustics_scene::Scene::load(Path::new(&scene)).expect("scene");
+    let meta = caustics::references::find(&refs, &loaded)
+        .expect("valid cache")
+        .expect("the quick reference is cached");
+    // Rounded up to whole work units, as `caustics reference --photons` rounds.
+    assert!(
+        meta.meta.photons >= 300_000 && meta.meta.seed == 1,
+        "{:?}",
+        meta.meta
+    );
+
+    // The second run finds it and renders nothing.
+    let (err, result) = run(&refs, &["--quick-reference-photons", "300000"]);
+    assert!(!err.contains("rendering a quick one"), "{err}");
+    assert!(err.contains("using cached reference"), "{err}");
+    assert!(result["errors"].is_object());
+
+    // Skipped on request: no reference, no errors, and the run says how to get one.
+    let empty = tmp.path().join("empty-refs");
+    let (err, result) = run(&empty, &["--quick-reference-photons", "0"]);
+    assert!(err.contains("no errors"), "{err}");
+    assert!(result["errors"].is_null(), "{}", result["errors"]);
+    assert!(!empty.exists(), "nothing rendered into the cache");
+}

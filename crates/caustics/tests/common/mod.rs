@@ -45,6 +45,7 @@ pub(crate) fn run_options(scene: &Path, out: &Path, method: &str, params: &[&str
         // pixel centre, is that image (tests/gpu_scoring.rs checks it bit for bit).
         score_grid: 1,
         references: out.join("no-reference-cache"),
+        quick_reference_photons: 0,
     }
 }
 
