@@ -14,7 +14,7 @@
 
 use beams::{BeamConfig, BeamMethod, BeamParams, CAPABILITIES, HullKind, Refinement};
 use caustics_gpu::{GpuContext, Renderer};
-use caustics_method::{Capabilities, CausticsMethod, Method, MethodError, Unsupported};
+use caustics_method::{Capabilities, CausticsMethod, CounterDoc, Method, MethodError, Unsupported};
 use caustics_scene::Scene;
 
 /// Registry name.
@@ -51,6 +51,7 @@ impl Method for AdaptiveBeams {
     const SUMMARY: &'static str = "hierarchical projected grid refined by a split oracle, tight beam hulls, surface and volume caustics";
     const SOURCE: &'static str = "Liktor & Dachsbacher 2011, Real-Time Volume Caustics with Adaptive Beam Tracing (liktor-dachsbacher-2011-adaptive-beam-tracing.txt)";
     const CAPABILITIES: Capabilities = CAPABILITIES;
+    const COUNTERS: &'static [CounterDoc] = beams::COUNTER_DOCS;
 
     fn check_scene(scene: &Scene, _: &AdaptiveBeamsParams) -> Result<(), Unsupported> {
         beams::check_scene(scene)

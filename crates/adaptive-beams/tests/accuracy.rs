@@ -81,6 +81,11 @@ fn adaptive_beams_on_sphere_on_plane_is_close_to_the_reference() {
         },
     );
     assert!(c.measured.counter("beams") > 0);
+    // Levels 0..=3 and both light-path families: every counter has its doc.
+    caustics_testing::assert_counters_documented(
+        &caustics_method::registry_entry::<adaptive_beams::AdaptiveBeams>(),
+        &c.measured.counters,
+    );
     assert_eq!(
         c.measured.counter("overflow_beams") + c.measured.counter("overflow_candidates"),
         0

@@ -3,7 +3,7 @@
 //! `C_*` of generate.wgsl are generated from it ([`wgsl`], prepended to the generate
 //! source), and so are the counters the method reports ([`counters`]).
 
-use caustics_method::Counters;
+use caustics_method::{CounterDoc, Counters};
 
 use crate::{MAX_BOUNCES, MAX_LEVELS};
 
@@ -89,6 +89,35 @@ pub(crate) const CONTROL: &[Word] = &[
     Word { span: Span::Families, ..counter("C_BEAMS_PER_FAMILY", 32, "beams_path", "beams emitted of each light-path family") },
     counter("C_BEAMS_REHIT", 42, "beams_path_rehit", "beams whose path meets a generator again (bounces)"),
     counter("C_BEAMS_TIR", 43, "beams_path_tir", "beams whose path is totally internally reflected on the way (bounces)"),
+];
+
+/// What each counter of both beam methods counts (`static-grid` and `adaptive-beams`
+/// report the same set): the control words read back after the frame (the generate
+/// pass of the last frame, the count frame), then the two that `BeamMethod::counters`
+/// derives. A test checks that every counter they can report is here, and nothing else.
+#[rustfmt::skip]
+pub const COUNTER_DOCS: &[CounterDoc] = &[
+    CounterDoc { name: "base_triangles", doc: "triangles of the unrefined projected grid in the light's view, 2 per cell (2 x grid^2); set by the parameters, not counted on the GPU" },
+    CounterDoc { name: "beams", doc: "beams written in the last frame's generate pass and rasterized as hulls, over all refinement levels and light-path families (after splitting and dropping; at most max_beams)" },
+    CounterDoc { name: "beams_level_N", doc: "beams written from leaves at refinement level N (0: the unrefined grid; one counter per level run), all families; they add up to beams" },
+    CounterDoc { name: "beams_path_main", doc: "beams written of the main light path (refracted through each dielectric, reflected off mirrors: the paper's path)" },
+    CounterDoc { name: "beams_path_fresnel_reflection", doc: "beams written of the Fresnel reflection off a dielectric's first interface (reflections = true; 0 without dielectrics)" },
+    CounterDoc { name: "beams_path_internal_N", doc: "beams written of the light reflected N times inside the first object, a closed refractor, before it leaves (bounces >= N; one counter per N up to bounces)" },
+    CounterDoc { name: "beams_path_rehit", doc: "beams written (any family) at least one of whose corner paths met the generator it had just left again and went on (a ring's opposite wall, a concave mesh; only with bounces > 0)" },
+    CounterDoc { name: "beams_path_tir", doc: "beams written (any family) at least one of whose corner paths took a total internal reflection and went on (only with bounces > 0)" },
+    CounterDoc { name: "candidates", doc: "grid triangles the split oracle looked at over all levels: the 2 x grid^2 base triangles plus the children of every split that fit in the candidate list" },
+    CounterDoc { name: "dropped_discontinuity", doc: "leaves (triangles not split) that emit no beam because their three corners' main light paths differ: some corners miss the generators (a silhouette), or they meet different objects or event sequences, or land on different receivers" },
+    CounterDoc { name: "dropped_invalid", doc: "leaves that emit no beam because none of their three corners' main light paths is valid (the light misses every generator, is totally internally reflected, or finds no exit)" },
+    CounterDoc { name: "dropped_no_receiver", doc: "beams not emitted because their consistent corner paths meet no receiver (counted per leaf and light-path family; only in scenes without a participating medium, where such a beam adds nothing)" },
+    CounterDoc { name: "hull_triangles", doc: "triangles of the beam hulls drawn by the rasterize pass: 8 per beam (8 x beams, derived)" },
+    CounterDoc { name: "hulls_prism", doc: "beams whose hull is Ernst et al.'s bounding prism (hull = prism, or a tight hull with no unique choice of triangle at an edge)" },
+    CounterDoc { name: "hulls_tight", doc: "beams whose hull is the paper's tight six-triangle hull (hull = tight and a unique choice at every edge); hulls_tight + hulls_prism = beams" },
+    CounterDoc { name: "levels_run", doc: "levels of the grid the generate pass decided on, the unrefined grid included (levels + 1)" },
+    CounterDoc { name: "overflow_beams", doc: "beams that found no room in the beam buffer (max_beams) and were not drawn: light missing from the image; 0 in a good run" },
+    CounterDoc { name: "overflow_candidates", doc: "children of splits that found no room in the next level's candidate list (max_beams) and were not refined further: light missing from the image; 0 in a good run" },
+    CounterDoc { name: "splits_camera", doc: "triangles split by the camera criterion: the beam's base spans more than split_camera_px pixels where its central ray passes closest to the eye (0 in static-grid, which never splits; a triangle split for several reasons counts in each splits_*)" },
+    CounterDoc { name: "splits_discontinuity", doc: "triangles split by the discontinuity criterion: corners partly missing the generators, on different paths, with normals or depths that differ too much, or an edge midpoint whose light lands off the linear prediction (0 in static-grid)" },
+    CounterDoc { name: "splits_energy", doc: "triangles split by the energy criterion: the beam's flux relative to an unrefined beam's times how much it focuses where it is seen exceeds split_energy_threshold (0 in static-grid)" },
 ];
 
 impl Word {
@@ -179,6 +208,29 @@ mod tests {
             names.len(),
             CONTROL.iter().filter(|w| w.counter.is_some()).count()
         );
+    }
+
+    /// Every counter the beam methods can report (every level and family at the
+    /// limits, and the two `BeamMethod::counters` derives) has a doc, and every doc is
+    /// of a counter they report.
+    #[test]
+    fn every_counter_is_documented() {
+        let c = [0u32; CONTROL_WORDS];
+        let mut names: Vec<String> = counters(&c, MAX_LEVELS, MAX_BOUNCES).into_keys().collect();
+        names.extend(["hull_triangles".into(), "base_triangles".into()]);
+        for name in &names {
+            assert!(
+                COUNTER_DOCS.iter().any(|d| d.matches(name)),
+                "counter {name} has no entry in COUNTER_DOCS"
+            );
+        }
+        for d in COUNTER_DOCS {
+            assert!(
+                names.iter().any(|n| d.matches(n)),
+                "COUNTER_DOCS documents {}, which is never reported",
+                d.name
+            );
+        }
     }
 
     #[test]

@@ -81,6 +81,7 @@ use caustics_scene::{Scene, Vec3};
 
 pub use config::{BeamConfig, BeamParams, HullKind, MAX_BOUNCES, MAX_LEVELS, Refinement, Tracer};
 use control::CONTROL_WORDS;
+pub use control::COUNTER_DOCS;
 pub use gpu_types::BeamRecord;
 use gpu_types::{BEAM_BYTES, BeamUniforms, CANDIDATE_BYTES, FilterUniforms, Slot};
 

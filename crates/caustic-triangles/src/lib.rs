@@ -60,7 +60,8 @@ use caustics_gpu::wgpu;
 use caustics_gpu::{Frame, GpuContext, Renderer};
 use caustics_method::params::closed;
 use caustics_method::{
-    Capabilities, CausticsMethod, Counters, Method, MethodError, Unsupported, method_params,
+    Capabilities, CausticsMethod, CounterDoc, Counters, Method, MethodError, Unsupported,
+    method_params,
 };
 use caustics_scene::Scene;
 use photon_hits::{CausticMap, PhotonHitConfig, PhotonHits};
@@ -118,6 +119,9 @@ impl Method for CausticTriangles {
     const SUMMARY: &'static str = "photon hit image from the light, neighbouring hits as triangles with per-vertex irradiance in a cube map with distance (no light leaks), camera lookup";
     const SOURCE: &'static str = "Umenhoffer, Patow & Szirmay-Kalos, Caustic Triangles on the GPU (umenhoffer-patow-szirmay-kalos-caustic-triangles.txt)";
     const CAPABILITIES: Capabilities = photon_hits::CAPABILITIES;
+    const COUNTERS: &'static [CounterDoc] = &CounterDoc::concat::<
+        { photon_hits::COUNTER_DOCS.len() + TRIANGLE_COUNTER_DOCS.len() },
+    >(photon_hits::COUNTER_DOCS, TRIANGLE_COUNTER_DOCS);
 
     fn check_scene(scene: &Scene, _params: &CausticTrianglesParams) -> Result<(), Unsupported> {
         photon_hits::check_scene(scene)
@@ -173,6 +177,22 @@ const TRI_REASONS: [(&str, &str); 6] = [
 /// The counter after the `TRI_*` reasons (grid.wgsl `ORPHAN_HITS`): valid hits none of
 /// whose triangles is kept.
 const ORPHAN_COUNTER: (&str, &str) = ("ORPHAN_HITS", "photon_hits_without_triangles");
+
+/// What each of caustic-triangles' own counters counts (the triangle passes, summed
+/// over the (light, generator) pairs); [`Method::COUNTERS`] adds them to the photon
+/// tracing ones of [`photon_hits::COUNTER_DOCS`]. `triangles_kept` and the
+/// `triangles_dropped_*` counters add up to `triangles`.
+#[rustfmt::skip]
+pub const TRIANGLE_COUNTER_DOCS: &[CounterDoc] = &[
+    CounterDoc { name: "triangles", doc: "triangles of the photon hit image (two per cell of four neighbouring texels, within one face and sheet) judged by the last frame's triangle_areas pass, summed over every (light, generator) pair" },
+    CounterDoc { name: "triangles_kept", doc: "triangles kept and drawn into the caustic cube map: three valid hits on one receiver by one specular path, with a non-zero receiver area at most max_stretch x their area at the generator" },
+    CounterDoc { name: "triangles_dropped_invalid_vertex", doc: "triangles dropped because at least one of their three texels holds no valid hit (any photons_* outcome)" },
+    CounterDoc { name: "triangles_dropped_receiver_mismatch", doc: "triangles dropped because their three hits land on different receiver objects" },
+    CounterDoc { name: "triangles_dropped_path_mismatch", doc: "triangles dropped because their hits took different specular paths (path ids: the side of the generator the light met, the number of further bounces off a mirror)" },
+    CounterDoc { name: "triangles_dropped_stretched", doc: "triangles dropped because their area on the receiver exceeds max_stretch x the area their light had at the generator (half the mean texel footprint): a span across a silhouette or a grazing exit" },
+    CounterDoc { name: "triangles_dropped_degenerate", doc: "triangles dropped because their area on the receiver is zero (coincident or collinear hits)" },
+    CounterDoc { name: "photon_hits_without_triangles", doc: "valid photon hits none of whose triangles is kept (orphans), counted by the vertex_irradiance pass: their light is lost unless splat_orphans draws each as a one-texel splat" },
+];
 
 /// `caustic-triangles` bound to one scene.
 pub struct CausticTriangles {
@@ -505,6 +525,31 @@ mod tests {
                 max_stretch,
                 vertex_area
             }
+        );
+    }
+
+    /// Every triangle counter `Reconstruction::counters` reports has a doc in the
+    /// method's list, and every doc of its own list is of one it reports.
+    #[test]
+    fn every_triangle_counter_is_documented() {
+        let mut names: Vec<&str> = TRI_REASONS.iter().map(|(_, n)| *n).collect();
+        names.extend(["triangles", ORPHAN_COUNTER.1]);
+        for name in &names {
+            assert!(
+                CausticTriangles::COUNTERS.iter().any(|d| d.matches(name)),
+                "counter {name} has no doc"
+            );
+        }
+        for d in TRIANGLE_COUNTER_DOCS {
+            assert!(
+                names.iter().any(|n| d.matches(n)),
+                "TRIANGLE_COUNTER_DOCS documents {}, which is never reported",
+                d.name
+            );
+        }
+        assert_eq!(
+            CausticTriangles::COUNTERS.len(),
+            photon_hits::COUNTER_DOCS.len() + TRIANGLE_COUNTER_DOCS.len()
         );
     }
 

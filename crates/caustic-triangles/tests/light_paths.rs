@@ -171,6 +171,11 @@ fn enough_bounces_deliver_all_the_light_entering_a_glass_sphere() {
         for lost in ["photons_no_receiver", "photons_no_exit"] {
             assert_eq!(counters[lost], 0, "{lost}");
         }
+        // Every bounce order and the reflection sheet: each counter has its doc.
+        caustics_testing::assert_counters_documented(
+            &caustics_method::registry_entry::<caustic_triangles::CausticTriangles>(),
+            &counters,
+        );
         ratios.push(ratio);
     }
     // The paper's path: T_in · T_out. Over a sphere's disk the mean Fresnel reflectance

@@ -24,7 +24,7 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// List the built-in scenes and the methods with their parameters and defaults.
+    /// List the built-in scenes and the methods with their parameters, defaults and counters.
     List,
     /// Render a scene with a method; write images, timings, fragment counts and errors.
     Run(RunOptions),
@@ -65,6 +65,9 @@ fn list() {
                 "  {:<20}   --param {}={}  {} ({}{range})",
                 "", p.name, p.default, p.doc, p.kind
             );
+        }
+        for c in m.counters {
+            println!("  {:<20}   counter {}: {}", "", c.name, c.doc);
         }
     }
 }

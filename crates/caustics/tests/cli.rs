@@ -171,6 +171,18 @@ fn list_shows_every_builtin_scene_and_method_defaults() {
         s.contains("wavefront") && s.contains("--param grid=512"),
         "{s}"
     );
+    // Each method's counters, with what they count (families once, as `_N`).
+    for counter in [
+        "counter beams: ",
+        "counter beams_level_N: ",
+        "counter photon_hits: ",
+        "counter triangles_kept: ",
+        "counter kernel_px: ",
+        "counter sample_pixel_pairs: ",
+        "counter vertices_landed: ",
+    ] {
+        assert!(s.contains(counter), "{counter:?} missing from list:\n{s}");
+    }
     assert!(
         !s.contains("does not load"),
         "a built-in scene does not load:\n{s}"

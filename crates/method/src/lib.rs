@@ -167,6 +167,10 @@ pub trait Method: 'static {
     const SOURCE: &'static str;
     /// What it supports.
     const CAPABILITIES: Capabilities;
+    /// Every counter [`CausticsMethod::counters`] reports, each with what it counts (a
+    /// numbered family once, as `<prefix>_N`: see [`CounterDoc`]). The method's GPU test
+    /// checks that every counter it reports is documented here.
+    const COUNTERS: &'static [CounterDoc];
 
     /// Scene checks beyond [`Capabilities::check`], given the (valid) parameters.
     fn check_scene(_scene: &Scene, _params: &Self::Params) -> Result<(), Unsupported> {
@@ -179,6 +183,57 @@ pub trait Method: 'static {
         renderer: &Renderer,
         params: &Self::Params,
     ) -> Result<Box<dyn CausticsMethod>, MethodError>;
+}
+
+/// What one counter of a method counts, for `caustics list` and the report's glossary.
+///
+/// A numbered family (`beams_level_0`, `beams_level_1`, ...) is documented once, with
+/// a name ending in `_N` (`beams_level_N`): see [`CounterDoc::matches`].
+#[derive(Clone, Copy, Debug)]
+pub struct CounterDoc {
+    /// The counter's name as [`CausticsMethod::counters`] reports it, or a family's
+    /// prefix followed by `_N`.
+    pub name: &'static str,
+    /// One line: what is counted, in which pass of which frame.
+    pub doc: &'static str,
+}
+
+impl CounterDoc {
+    /// Whether `counter` is the counter this documents: the same name, or, for a
+    /// family `<prefix>_N`, `<prefix>_` followed by one or more ASCII digits.
+    pub fn matches(&self, counter: &str) -> bool {
+        if counter == self.name {
+            return true;
+        }
+        let Some(prefix) = self.name.strip_suffix('N') else {
+            return false;
+        };
+        prefix.ends_with('_')
+            && counter
+                .strip_prefix(prefix)
+                .is_some_and(|n| !n.is_empty() && n.bytes().all(|b| b.is_ascii_digit()))
+    }
+
+    /// `a` then `b`, as one array of `N` = `a.len() + b.len()` docs: a method's list
+    /// from a shared crate's and its own (`const COUNTERS: &[CounterDoc] =
+    /// &CounterDoc::concat::<{ SHARED.len() + OWN.len() }>(SHARED, OWN);`).
+    ///
+    /// # Panics
+    /// At compile time, where `N` is not `a.len() + b.len()`.
+    pub const fn concat<const N: usize>(a: &[CounterDoc], b: &[CounterDoc]) -> [CounterDoc; N] {
+        assert!(a.len() + b.len() == N, "N must be a.len() + b.len()");
+        let mut out = [CounterDoc { name: "", doc: "" }; N];
+        let mut i = 0;
+        while i < a.len() {
+            out[i] = a[i];
+            i += 1;
+        }
+        while i < N {
+            out[i] = b[i - a.len()];
+            i += 1;
+        }
+        out
+    }
 }
 
 /// Builds a method instance for the renderer's scene from parsed parameters.
@@ -197,6 +252,8 @@ pub struct MethodInfo {
     pub capabilities: Capabilities,
     /// Its parameters with defaults (the paper's), types, ranges and docs.
     pub params: fn() -> Vec<ParamSpec>,
+    /// What each counter it reports counts ([`Method::COUNTERS`]).
+    pub counters: &'static [CounterDoc],
     /// Parses and checks parameters once (a JSON object; `null` = defaults), without
     /// touching the GPU, so a bad `--param` fails before any work or any write.
     pub parse: fn(&serde_json::Value) -> Result<ParsedParams, MethodError>,
@@ -212,6 +269,16 @@ impl MethodInfo {
         self.capabilities.check(scene)?;
         (self.check_scene)(scene, params)
     }
+
+    /// The doc of the counter `name` as the method reports it (`beams_level_2` finds
+    /// the family `beams_level_N`); `None` where the method does not document it.
+    pub fn counter_doc(&self, name: &str) -> Option<&'static str> {
+        self.counters
+            .iter()
+            .find(|d| d.name == name)
+            .or_else(|| self.counters.iter().find(|d| d.matches(name)))
+            .map(|d| d.doc)
+    }
 }
 
 /// The registry entry of `M`: one generic function instead of per-method glue.
@@ -222,6 +289,7 @@ pub fn registry_entry<M: Method>() -> MethodInfo {
         source: M::SOURCE,
         capabilities: M::CAPABILITIES,
         params: M::Params::specs,
+        counters: M::COUNTERS,
         parse: parse_erased::<M>,
         check_scene: check_erased::<M>,
         create: create_erased::<M>,
@@ -279,4 +347,81 @@ pub fn render_scoring_frame(
     renderer.set_subpixel_offset(&ctx.queue, [0.0, 0.0]);
     rendered?;
     Ok(accumulator.read_mean(ctx)?)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const BEAMS: CounterDoc = CounterDoc {
+        name: "beams",
+        doc: "beams",
+    };
+    const LEVELS: CounterDoc = CounterDoc {
+        name: "beams_level_N",
+        doc: "beams per level",
+    };
+
+    #[test]
+    fn counter_doc_matches_exact_names_and_numbered_families() {
+        assert!(BEAMS.matches("beams"));
+        assert!(!BEAMS.matches("beams_level_0"));
+        assert!(!BEAMS.matches("beam"));
+        for n in ["beams_level_0", "beams_level_7", "beams_level_12"] {
+            assert!(LEVELS.matches(n), "{n}");
+        }
+        assert!(LEVELS.matches("beams_level_N"), "the family's own name");
+        for n in [
+            "beams_level_",
+            "beams_level_x",
+            "beams_level_1a",
+            "beams_level_-1",
+            "beams_level",
+            "beams_levels_1",
+            "beams_level_1_2",
+            "other_level_1",
+        ] {
+            assert!(!LEVELS.matches(n), "{n}");
+        }
+        // Only a name ending in `_N` is a family.
+        let plain = CounterDoc {
+            name: "kernel_pxN",
+            doc: "",
+        };
+        assert!(!plain.matches("kernel_px1"));
+    }
+
+    #[test]
+    fn method_info_finds_a_counters_doc_by_name_or_family() {
+        fn refused() -> MethodError {
+            MethodError::Param {
+                method: "test",
+                message: String::new(),
+            }
+        }
+        let info = MethodInfo {
+            name: "test",
+            summary: "",
+            source: "",
+            capabilities: Capabilities::default(),
+            params: Vec::new,
+            counters: &[LEVELS, BEAMS],
+            parse: |_| Err(refused()),
+            check_scene: |_, _| Ok(()),
+            create: |_, _, _| Err(refused()),
+        };
+        assert_eq!(info.counter_doc("beams"), Some("beams"));
+        assert_eq!(info.counter_doc("beams_level_3"), Some("beams per level"));
+        assert_eq!(info.counter_doc("beams_level_x"), None);
+        assert_eq!(info.counter_doc("photons"), None);
+    }
+
+    #[test]
+    fn concat_keeps_both_lists_in_order() {
+        const A: &[CounterDoc] = &[BEAMS];
+        const B: &[CounterDoc] = &[LEVELS, BEAMS];
+        const ALL: [CounterDoc; 3] = CounterDoc::concat::<{ A.len() + B.len() }>(A, B);
+        let names: Vec<_> = ALL.iter().map(|d| d.name).collect();
+        assert_eq!(names, ["beams", "beams_level_N", "beams"]);
+    }
 }

@@ -67,7 +67,7 @@ use caustics_gpu::{
     Frame, GBuffer, GpuContext, GpuError, GpuScene, LightProjection, LightView, Renderer, shader,
 };
 use caustics_method::params::{above, closed};
-use caustics_method::{Capabilities, Counters, MethodError, Unsupported};
+use caustics_method::{Capabilities, CounterDoc, Counters, MethodError, Unsupported};
 use caustics_scene::{Material, Scene, Shape, Vec3};
 
 /// Types shared by every photon-hit pass (`PhotonHit`, `CausticMapUniform`).
@@ -105,6 +105,25 @@ const HIT_REASONS: [(&str, &str); 7] = [
     ("HIT_SECOND_BOUNCE", "photons_second_bounce"),
     ("HIT_NO_RECEIVER", "photons_no_receiver"),
     ("HIT_SPECULAR_RECEIVER", "photons_specular_receiver"),
+];
+
+/// What each photon-tracing counter counts, the counters both `caustic-triangles` and
+/// `splatting` report ([`PhotonHits::counters`], summed over the (light, generator)
+/// pairs). Each hit-image texel of each sheet gets exactly one outcome in the last
+/// frame's `trace_photons` pass, so `photon_hits` and the `photons_*` counters add up
+/// to `photon_texels`.
+#[rustfmt::skip]
+pub const COUNTER_DOCS: &[CounterDoc] = &[
+    CounterDoc { name: "photon_texels", doc: "texels of the photon hit location image: light-view texels x faces x sheets (one sheet per specular path: bounces, reflections), summed over every (light, generator) pair" },
+    CounterDoc { name: "photon_hits", doc: "hit-image texels (all sheets) whose light lands on a diffuse receiver in the last frame's trace_photons pass; includes photon_hits_fresnel_reflection and photon_hits_bounce_N" },
+    CounterDoc { name: "photon_hits_fresnel_reflection", doc: "those of photon_hits in the Fresnel-reflection sheet: light reflected off a dielectric generator's first interface (reflections = true)" },
+    CounterDoc { name: "photon_hits_bounce_N", doc: "those of photon_hits whose light took N further specular events on the generator: it left a closed refractor after N internal reflections (sheet N), or reflected N more times off a mirror (bounces >= N)" },
+    CounterDoc { name: "photons_missing_generator", doc: "hit-image texels (every sheet) whose light meets nothing, or another object first, in the light G-buffer: no caustic path through this generator" },
+    CounterDoc { name: "photons_total_internal_reflection", doc: "texels of a sheet whose light is totally internally reflected where that sheet's path refracts out (a closed refractor's exit, an open one met from below): none of it lands from there (with bounces it goes on inside, to the next sheet)" },
+    CounterDoc { name: "photons_no_exit", doc: "texels of a closed refractor whose exit point the search in the generator's distance map did not find (that sheet and every later one)" },
+    CounterDoc { name: "photons_second_bounce", doc: "texels whose light, reflected off a mirror generator, meets that mirror again once its bounces further reflections are spent (the ring's opposite wall): dropped" },
+    CounterDoc { name: "photons_no_receiver", doc: "texels whose light, leaving the generator, finds no surface in the receivers' distance map (it leaves the scene)" },
+    CounterDoc { name: "photons_specular_receiver", doc: "texels whose light lands on another specular object (or where the receivers' distance map names no object): dropped, not traced on to the receivers behind it" },
 ];
 
 /// Most further specular events [`PhotonHitConfig::bounces`] allows (the counters
@@ -680,6 +699,29 @@ mod tests {
                 caustics_gpu::layout::wgsl_u32_constant(TYPES_WGSL, constant).ok(),
                 Some(index as u32),
                 "{constant}"
+            );
+        }
+    }
+
+    /// Every counter [`PhotonHits::counters`] can report has a doc, and every doc is
+    /// of one it reports.
+    #[test]
+    fn every_counter_is_documented() {
+        let mut names: Vec<String> = HIT_REASONS.iter().map(|(_, n)| (*n).into()).collect();
+        names.push("photon_texels".into());
+        names.push("photon_hits_fresnel_reflection".into());
+        names.extend((1..=MAX_BOUNCES).map(|k| format!("photon_hits_bounce_{k}")));
+        for name in &names {
+            assert!(
+                COUNTER_DOCS.iter().any(|d| d.matches(name)),
+                "counter {name} has no entry in COUNTER_DOCS"
+            );
+        }
+        for d in COUNTER_DOCS {
+            assert!(
+                names.iter().any(|n| d.matches(n)),
+                "COUNTER_DOCS documents {}, which is never reported",
+                d.name
             );
         }
     }

@@ -71,7 +71,8 @@ use caustics_gpu::wgpu::{self, util::DeviceExt};
 use caustics_gpu::{Frame, GpuContext, Renderer, shader};
 use caustics_method::params::{above, closed};
 use caustics_method::{
-    Capabilities, CausticsMethod, Counters, Method, MethodError, Unsupported, method_params,
+    Capabilities, CausticsMethod, CounterDoc, Counters, Method, MethodError, Unsupported,
+    method_params,
 };
 use caustics_scene::{Light, Material, Scene, Shape, Vec3};
 use serde::{Deserialize, Serialize};
@@ -191,6 +192,7 @@ impl Method for Pinhole {
         point_light: true,
         spot_light: true,
     };
+    const COUNTERS: &'static [CounterDoc] = COUNTER_DOCS;
 
     fn check_scene(scene: &Scene, _params: &PinholeParams) -> Result<(), Unsupported> {
         check_scene(scene)
@@ -360,6 +362,18 @@ impl LightDisc {
         }
     }
 }
+
+/// What each counter of `pinhole` counts ([`Method::COUNTERS`]). The gather pass
+/// counts only in the count frame (the last one), whose counts are reported.
+#[rustfmt::skip]
+const COUNTER_DOCS: &[CounterDoc] = &[
+    CounterDoc { name: "samples", doc: "point samples on the caustic generator, each a pinhole camera projecting the light map (the samples parameter)" },
+    CounterDoc { name: "passes", doc: "additive gather passes per frame (instances of a fullscreen triangle), each looping over samples_per_pass samples: samples / samples_per_pass, rounded up" },
+    CounterDoc { name: "camera_pixels", doc: "pixels of the camera image (width x height), each covered by every gather pass: set by the scene, not counted on the GPU" },
+    CounterDoc { name: "receiver_fragments", doc: "gather fragments on a diffuse receiver pixel in the count frame, over all passes (pixels that see a diffuse surface x passes; the others are discarded)" },
+    CounterDoc { name: "sample_pixel_pairs", doc: "(receiver pixel, sample) pairs the gather loop evaluated in the count frame: diffuse receiver pixels x samples (with reflections each pair also evaluates the reflected path, counted once)" },
+    CounterDoc { name: "texture_fetches", doc: "light-map probes taken in the count frame: 1 per lookup whose filter footprint is within a texel (always, with filtering off), up to 16 along an anisotropic filter footprint, none for a pair culled as facing away, occluded, without a path or outside the light (both paths with reflections)" },
+];
 
 /// `pinhole` bound to one scene.
 pub struct Pinhole {

@@ -141,6 +141,10 @@ fn ring_has_consistent_counters_passes_and_heatmap() {
     let lit = surface.pixels.iter().filter(|p| p[1] > 0.0).count();
     assert!(lit > 50, "only {lit} caustic pixels");
     let c = &measured.counters;
+    caustics_testing::assert_counters_documented(
+        &caustics_method::registry_entry::<pinhole::Pinhole>(),
+        c,
+    );
     assert_eq!(c["samples"], 200);
     assert_eq!(c["passes"], 4, "ceil(200 / 64)");
     // Every receiver fragment of every pass loops over its batch: pairs = pixels × N.

@@ -43,7 +43,8 @@ use caustics_gpu::wgpu::{self, util::DeviceExt};
 use caustics_gpu::{Frame, GpuContext, Renderer};
 use caustics_method::params::closed;
 use caustics_method::{
-    Capabilities, CausticsMethod, Counters, Method, MethodError, Unsupported, method_params,
+    Capabilities, CausticsMethod, CounterDoc, Counters, Method, MethodError, Unsupported,
+    method_params,
 };
 use caustics_scene::Scene;
 use photon_hits::{CausticMap, PhotonHitConfig, PhotonHits};
@@ -104,12 +105,22 @@ pub fn kernel_px(params: &SplattingParams) -> u32 {
     }
 }
 
+/// What splatting's own counter says; [`Method::COUNTERS`] adds it to the photon
+/// tracing ones of [`photon_hits::COUNTER_DOCS`].
+pub const SPLAT_COUNTER_DOCS: &[CounterDoc] = &[CounterDoc {
+    name: "kernel_px",
+    doc: "side of the square kernel each valid photon hit is splatted with, in cube-map texels: the kernel_px parameter, or 4 x cube_size / resolution (rounded, within 1..=64) where it is 0 (a setting, not a count)",
+}];
+
 impl Method for Splatting {
     type Params = SplattingParams;
     const NAME: &'static str = NAME;
     const SUMMARY: &'static str = "the caustic-mapping baseline: the photon hits of caustic-triangles splatted as fixed kernels into the same cube map";
     const SOURCE: &'static str = "photon splatting as compared in Umenhoffer, Patow & Szirmay-Kalos, Caustic Triangles on the GPU, Fig. 1";
     const CAPABILITIES: Capabilities = photon_hits::CAPABILITIES;
+    const COUNTERS: &'static [CounterDoc] = &CounterDoc::concat::<
+        { photon_hits::COUNTER_DOCS.len() + SPLAT_COUNTER_DOCS.len() },
+    >(photon_hits::COUNTER_DOCS, SPLAT_COUNTER_DOCS);
 
     fn check_scene(scene: &Scene, _params: &SplattingParams) -> Result<(), Unsupported> {
         photon_hits::check_scene(scene)

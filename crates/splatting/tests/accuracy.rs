@@ -80,10 +80,13 @@ fn refracting_sphere_with_the_extended_light_paths_has_all_the_light() {
     // lavapipe's figures (flux 0.993, relMSE after flux 1.2e-4 (one pixel off: 5.2e-3),
     // HDR-FLIP after flux 0.111): HDR-FLIP falls to a quarter of the paper path's, the
     // flux comes within 1 % of 1.
+    let info = caustics_method::registry_entry::<splatting::Splatting>();
     let c = caustics_testing::refracting_sphere_with(
-        &caustics_method::registry_entry::<splatting::Splatting>(),
+        &info,
         serde_json::json!({"bounces": 2, "reflections": true}),
     );
+    // The bounce orders and the reflection sheet: every counter has its doc.
+    caustics_testing::assert_counters_documented(&info, &c.measured.counters);
     c.check(
         &artifacts!(),
         &Bounds {

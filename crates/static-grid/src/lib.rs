@@ -5,7 +5,7 @@
 
 use beams::{BeamConfig, BeamMethod, BeamParams, CAPABILITIES, HullKind, Refinement};
 use caustics_gpu::{GpuContext, Renderer};
-use caustics_method::{Capabilities, CausticsMethod, Method, MethodError, Unsupported};
+use caustics_method::{Capabilities, CausticsMethod, CounterDoc, Method, MethodError, Unsupported};
 use caustics_scene::Scene;
 
 /// Registry name.
@@ -40,6 +40,7 @@ impl Method for StaticGrid {
         "beams from a regular projected grid (no refinement), bounding prisms";
     const SOURCE: &'static str = "Liktor & Dachsbacher 2010, as the static grids of Fig. 4 in liktor-dachsbacher-2011-adaptive-beam-tracing.txt";
     const CAPABILITIES: Capabilities = CAPABILITIES;
+    const COUNTERS: &'static [CounterDoc] = beams::COUNTER_DOCS;
 
     fn check_scene(scene: &Scene, _: &StaticGridParams) -> Result<(), Unsupported> {
         beams::check_scene(scene)

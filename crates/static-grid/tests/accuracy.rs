@@ -9,11 +9,13 @@ use caustics_testing::{Bounds, Gpu, TEST_REFERENCE, artifacts, builtin, compare}
 #[test]
 fn static_grid_counts_its_beams_and_refuses_refinement_parameters() {
     let gpu = Gpu::new(builtin("sphere_on_plane", 64, 48));
+    let info = caustics_method::registry_entry::<static_grid::StaticGrid>();
     let mut method = gpu.method(
-        &caustics_method::registry_entry::<static_grid::StaticGrid>(),
+        &info,
         serde_json::json!({"light_resolution": 256, "grid": 16}),
     );
     let c = gpu.measure(method.as_mut(), 0, 1).counters;
+    caustics_testing::assert_counters_documented(&info, &c);
     assert_eq!(c["base_triangles"], 512);
     assert_eq!(
         c["beams"], c["beams_level_0"],

@@ -283,3 +283,23 @@ impl Measured {
             .unwrap_or_else(|| panic!("no counter {name}; counters: {:?}", self.counters))
     }
 }
+
+/// Asserts that every counter in `counters` (as `info`'s method reported them) has a
+/// doc in the method's `Method::COUNTERS`, the glossary of `caustics list` and the
+/// report.
+///
+/// # Panics
+/// Naming each undocumented counter.
+pub fn assert_counters_documented(info: &MethodInfo, counters: &Counters) {
+    let missing: Vec<&str> = counters
+        .keys()
+        .map(String::as_str)
+        .filter(|name| info.counter_doc(name).is_none())
+        .collect();
+    assert!(
+        missing.is_empty(),
+        "{} reports counters with no doc in its Method::COUNTERS: {}",
+        info.name,
+        missing.join(", ")
+    );
+}

@@ -12,7 +12,8 @@
 //! - [`Gpu`] uploads it and builds a method through its registry entry
 //!   ([`Gpu::method`], JSON parameters, as the harness does) or directly; [`Gpu::measure`]
 //!   records timed frames and one count frame ([`Measured`]: passes, times, pipeline
-//!   statistics, fill counts, counters); [`Gpu::surface`] & co. read the targets back;
+//!   statistics, fill counts, counters), and [`assert_counters_documented`] checks its
+//!   counters against the method's docs; [`Gpu::surface`] & co. read the targets back;
 //!   [`Gpu::scoring_frame`] averages sub-pixel offsets (DESIGN "Measuring honestly");
 //! - [`reference`] renders the CPU reference at a fixed photon budget and seed, cached
 //!   under the target folder by scene hash, resolution, photons, seed and the reference's
@@ -72,7 +73,7 @@ pub use caustics_reference::ReferenceOptions;
 pub use compare::{
     Bounds, Comparison, TEST_REFERENCE, compare, refracting_sphere, refracting_sphere_with, shifted,
 };
-pub use gpu::{Gpu, Measured, Scored, context};
+pub use gpu::{Gpu, Measured, Scored, assert_counters_documented, context};
 pub use reference::{ReferenceImages, reference};
 pub use scenes::{builtin, builtin_json, fresnel_reflectance, plane_hit, scene};
 pub use score::{reference_tone, score};

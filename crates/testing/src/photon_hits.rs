@@ -83,12 +83,14 @@ pub fn distance_test_removes_the_light_leak(info: &MethodInfo) {
 
 /// Two runs of `scene` with [`small`] settings give the same counters, fragment counts
 /// and image; the image is not empty, more than 100 photons hit, every one of the 48²
-/// photon texels is traced, and each of `passes` is timed as `<method>/<pass>`.
+/// photon texels is traced, each of `passes` is timed as `<method>/<pass>`, and every
+/// counter has its doc in the method's `Method::COUNTERS`.
 pub fn deterministic(info: &MethodInfo, scene: Scene, passes: &[&str]) {
     let floor = format!("no caustic on the {} floor", scene.name);
     let (a, ra) = run(info, scene.clone(), small(serde_json::json!({})));
     let (b, rb) = run(info, scene, small(serde_json::json!({})));
     assert_eq!(ra.counters, rb.counters);
+    crate::assert_counters_documented(info, &ra.counters);
     assert!(ra.counter("photon_hits") > 100, "{:?}", ra.counters);
     assert_eq!(ra.counter("photon_texels"), 48 * 48);
     let fa = ra.method_fragments(info.name).expect("pipeline statistics");

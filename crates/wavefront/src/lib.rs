@@ -45,7 +45,8 @@ use caustics_gpu::wgpu::{self, util::DeviceExt};
 use caustics_gpu::{Frame, GpuContext, Renderer, shader};
 use caustics_method::params::{above, closed};
 use caustics_method::{
-    Capabilities, CausticsMethod, Counters, Method, MethodError, Unsupported, method_params,
+    Capabilities, CausticsMethod, CounterDoc, Counters, Method, MethodError, Unsupported,
+    method_params,
 };
 use caustics_scene::{Material, Scene, Shape};
 
@@ -108,6 +109,7 @@ impl Method for Wavefront {
         point_light: true,
         spot_light: true,
     };
+    const COUNTERS: &'static [CounterDoc] = COUNTER_DOCS;
 
     fn check_scene(scene: &Scene, _params: &WavefrontParams) -> Result<(), Unsupported> {
         check_scene(scene)
@@ -206,6 +208,33 @@ const VERTEX_COUNTERS: [&str; 10] = [
     "vertices_too_many_events",
     "vertices_other_sheet",
     "vertices_landed_after_rehit",
+];
+
+/// What each counter of `wavefront` counts ([`Method::COUNTERS`]): in the last frame,
+/// summed over the sheets. Each traced vertex has one outcome (`vertices_landed` or one
+/// of the drops), so those add up to `source_vertices`; `kept_triangles` and the
+/// `dropped_*` counters add up to `triangles`.
+#[rustfmt::skip]
+const COUNTER_DOCS: &[CounterDoc] = &[
+    CounterDoc { name: "sheets", doc: "wavefronts traced per frame: one per light, specular object and specular path (transmitted; with bounces, 1..=bounces internal reflections in a closed refractor; with reflections, the Fresnel reflection off a dielectric)" },
+    CounterDoc { name: "source_vertices", doc: "wavefront vertices (light rays) traced by the trace_vertices pass, summed over the sheets: a grid x grid lattice over each analytic generator's bounding sphere, a heightfield's own vertex grid" },
+    CounterDoc { name: "triangles", doc: "wavefront triangles judged by the classify_triangles pass, summed over the sheets" },
+    CounterDoc { name: "bvh_triangles", doc: "triangles in the scene's triangle BVH (meshes and tessellated heightfields; analytic shapes are traced exactly) that the rays are traced against: a property of the scene, not a per-frame count" },
+    CounterDoc { name: "kept_triangles", doc: "triangles whose three vertices landed on the same side of the same receiver by the same specular path: drawn by the splat pass with brightness from the area ratio before/after" },
+    CounterDoc { name: "dropped_invalid_vertex", doc: "triangles dropped because at least one of their vertices did not land (any vertices_* drop)" },
+    CounterDoc { name: "dropped_receiver_mismatch", doc: "triangles dropped because their vertices landed on different receivers, or on different sides of one" },
+    CounterDoc { name: "dropped_path_mismatch", doc: "triangles dropped because their vertices took different specular paths (the objects met and the side each was met from, in order)" },
+    CounterDoc { name: "dropped_face_mismatch", doc: "older results only (now dropped_path_mismatch): triangles dropped because their vertices met different sides of the generator (a ring's outer and inner walls)" },
+    CounterDoc { name: "vertices_landed", doc: "vertices whose ray reached a diffuse receiver along its sheet's path" },
+    CounterDoc { name: "vertices_landed_after_rehit", doc: "those of vertices_landed whose path met an object it had already left again on the way (a mirror ring's opposite wall; only with bounces > 0)" },
+    CounterDoc { name: "vertices_missed_generator", doc: "lattice rays whose first surface is not this wavefront's generator: they miss it, or meet another object first (another generator's wavefront, or direct light)" },
+    CounterDoc { name: "vertices_shadowed", doc: "vertices whose light is blocked before the generator: anything behind a directional light's lattice plane, or between the light and a heightfield vertex" },
+    CounterDoc { name: "vertices_total_internal_reflection", doc: "vertices whose path ends at a total internal reflection at an interface where their sheet transmits (Wallace's single refraction, the default path)" },
+    CounterDoc { name: "vertices_no_receiver", doc: "vertices whose ray, after a specular event, meets no surface (it leaves the scene)" },
+    CounterDoc { name: "vertices_rehit", doc: "vertices whose ray meets an object it has already left (a mirror ring's opposite wall) with no bounces left: the path ends" },
+    CounterDoc { name: "vertices_wrong_side", doc: "vertices dropped where a mesh's shading and geometric normals disagree about the side the light arrives or leaves on (interpolated normals)" },
+    CounterDoc { name: "vertices_too_many_events", doc: "vertices still meeting specular surfaces after 16 specular events: dropped" },
+    CounterDoc { name: "vertices_other_sheet", doc: "vertices that reached a diffuse receiver before taking every reflection their sheet asks for (their light is another sheet's): dropped, so the sheets partition the light" },
 ];
 
 /// The sheets of one generator: the `reflect_mask` of each (trace.wgsl). Light
@@ -606,6 +635,21 @@ mod tests {
         shader::validate_wgsl("trace.wgsl", &trace_source())?;
         shader::validate_wgsl("classify.wgsl", &pass_source(CLASSIFY_WGSL))?;
         shader::validate_wgsl("splat.wgsl", &pass_source(SPLAT_WGSL))
+    }
+
+    /// Every counter `Wavefront::counters` reports has a doc.
+    #[test]
+    fn every_counter_is_documented() {
+        let names = ["sheets", "source_vertices", "triangles", "bvh_triangles"]
+            .into_iter()
+            .chain(TRIANGLE_COUNTERS)
+            .chain(VERTEX_COUNTERS);
+        for name in names {
+            assert!(
+                COUNTER_DOCS.iter().any(|d| d.matches(name)),
+                "counter {name} has no doc"
+            );
+        }
     }
 
     #[test]

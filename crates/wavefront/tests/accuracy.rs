@@ -43,6 +43,10 @@ fn water_pool_gives_a_finite_nonempty_caustic_with_consistent_counts_passes_and_
         255 * 255 * 2,
         "the 256² water grid"
     );
+    caustics_testing::assert_counters_documented(
+        &caustics_method::registry_entry::<wavefront::Wavefront>(),
+        &measured.counters,
+    );
 
     // Timestamps: lavapipe has them, so every pass of every measured frame has a time,
     // none rejected.
