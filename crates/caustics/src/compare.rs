@@ -83,6 +83,10 @@ pub struct CompareArgs {
     /// only); by default such pairs are not comparable.
     #[arg(long)]
     pub across_adapters: bool,
+    /// Also write the comparison as a static HTML page to this file (the only file
+    /// compare writes; never inside BASE or NEW).
+    #[arg(long, value_name = "FILE.html")]
+    pub html: Option<PathBuf>,
 }
 
 /// Exit code of `compare` when a comparable pair regressed (1 is an error).
@@ -136,8 +140,33 @@ pub struct Line {
     pub change: String,
     /// The test behind the verdict (tolerance, p-value), shown with `--wide`.
     pub detail: String,
+    /// What the HTML page draws: the two values and the change allowed around the base.
+    pub band: Option<Band>,
     /// The verdict.
     pub verdict: Verdict,
+}
+
+/// The numbers behind a verdict, for the HTML page.
+#[derive(Clone, Debug)]
+pub enum Band {
+    /// A count or an error: worse/changed beyond `allowed` (absolute) from `base`.
+    Value {
+        /// Baseline value.
+        base: f64,
+        /// New value.
+        new: f64,
+        /// Change allowed either way.
+        allowed: f64,
+    },
+    /// Per-frame GPU times of both runs, and the relative threshold on the median.
+    Samples {
+        /// Baseline samples (ms).
+        base: Vec<f64>,
+        /// New samples (ms).
+        new: Vec<f64>,
+        /// `--time-threshold`.
+        threshold: f64,
+    },
 }
 
 /// The result of a comparison.
@@ -181,6 +210,65 @@ impl Report {
     /// one-line verdict.
     pub fn table(&self, all: bool) -> String {
         self.render(all, false)
+    }
+
+    /// A static HTML page of the comparison (`--html FILE`), in the manner of criterion's
+    /// reports: per run, each measure's base and new value with the band inside which a
+    /// change is not one, drawn as a strip (counts and errors: the base's band and the new
+    /// value; timings: both runs' per-frame samples, their medians and the threshold).
+    /// Changed lines only unless `all`.
+    pub fn html(&self, base: &str, new: &str, all: bool) -> String {
+        let esc = |s: &str| {
+            s.replace('&', "&amp;")
+                .replace('<', "&lt;")
+                .replace('>', "&gt;")
+                .replace('"', "&quot;")
+        };
+        let mut h = String::new();
+        h.push_str("<!DOCTYPE html>\n<html lang=en><head><meta charset=utf-8><title>caustics compare</title><style>body{font-family:sans-serif;margin:2em;color:#222}table{border-collapse:collapse;font-size:13px;margin:.5em 0 1.5em}td,th{border:1px solid #ccc;padding:3px 6px;text-align:right}td:first-child,th{text-align:left}th{background:#f0f0f0}tr.REGRESSION td{background:#fde4e4}tr.better td{background:#e4f5e4}tr.NOT td{background:#fff1d6}.meta{color:#555;font-size:13px}</style></head><body>\n");
+        h += &format!(
+            "<h1>caustics compare</h1><p class=meta>BASE {}<br>NEW {}</p><p><b>{}</b></p>\n",
+            esc(base),
+            esc(new),
+            esc(self.table(false).lines().last().unwrap_or_default())
+        );
+        h.push_str("<p class=meta>Bands: a count or error is unchanged inside the grey band around BASE (the tolerance, or the reference's noise for RMSE); timings show every frame of BASE (blue) and NEW (orange), their medians (ticks) and the threshold around BASE's median (grey).</p>\n");
+        let rows: Vec<&Line> = self
+            .lines
+            .iter()
+            .filter(|l| all || l.verdict != Verdict::Same)
+            .collect();
+        let mut run: Option<&str> = None;
+        for l in &rows {
+            if run != Some(l.run.as_str()) {
+                if run.is_some() {
+                    h.push_str("</table>\n");
+                }
+                h += &format!(
+                    "<h3>{}</h3><table><tr><th>measure</th><th>base</th><th>new</th><th>change</th><th>band</th><th>verdict</th><th>test</th></tr>\n",
+                    esc(&l.run)
+                );
+                run = Some(&l.run);
+            }
+            let class = l.verdict.word().split(' ').next().unwrap_or_default();
+            h += &format!(
+                "<tr class={class}><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>\n",
+                esc(&l.measure),
+                esc(&l.base),
+                esc(&l.new),
+                esc(&l.change),
+                l.band.as_ref().map(band_svg).unwrap_or_default(),
+                esc(l.verdict.word()),
+                esc(&l.detail)
+            );
+        }
+        if run.is_some() {
+            h.push_str("</table>\n");
+        } else {
+            h.push_str("<p>Nothing changed.</p>\n");
+        }
+        h.push_str("</body></html>\n");
+        h
     }
 
     /// The wide table: one row per comparison with its test (`--wide`).
@@ -264,6 +352,97 @@ impl Report {
     }
 }
 
+/// A horizontal value axis of a band's strip: `lo..hi` (padded) onto 240 px.
+struct Strip {
+    lo: f64,
+    hi: f64,
+}
+
+impl Strip {
+    const W: f64 = 240.0;
+
+    fn new(lo: f64, hi: f64) -> Strip {
+        let (lo, hi) = if hi > lo {
+            (lo, hi)
+        } else {
+            (lo - 1.0, hi + 1.0)
+        };
+        let pad = 0.08 * (hi - lo);
+        Strip {
+            lo: lo - pad,
+            hi: hi + pad,
+        }
+    }
+
+    fn x(&self, v: f64) -> f64 {
+        4.0 + (Self::W - 8.0) * (v - self.lo) / (self.hi - self.lo)
+    }
+
+    fn svg(body: &str) -> String {
+        format!(
+            "<svg width={0} height=18 viewBox=\"0 0 {0} 18\">{body}</svg>",
+            Self::W
+        )
+    }
+}
+
+/// An inline SVG strip of a [`Band`] (see [`Report::html`]).
+fn band_svg(b: &Band) -> String {
+    match b {
+        Band::Value { base, new, allowed } => {
+            let (lo, hi) = ((base - allowed).min(*new), (base + allowed).max(*new));
+            if !(lo.is_finite() && hi.is_finite()) {
+                return String::new();
+            }
+            let s = Strip::new(lo, hi);
+            Strip::svg(&format!(
+                "<rect x={:.1} y=3 width={:.1} height=12 fill=\"#ddd\"/><line x1={2:.1} x2={2:.1} y1=1 y2=17 stroke=\"#1f77b4\" stroke-width=2/><circle cx={3:.1} cy=9 r=4 fill=\"#ff7f0e\"/>",
+                s.x(base - allowed),
+                (s.x(base + allowed) - s.x(base - allowed)).max(0.5),
+                s.x(*base),
+                s.x(*new)
+            ))
+        }
+        Band::Samples {
+            base,
+            new,
+            threshold,
+        } => {
+            let median = |v: &[f64]| crate::stats::summarize(v).map_or(f64::NAN, |s| s.median);
+            let (mb, mn) = (median(base), median(new));
+            let (band_lo, band_hi) = (mb / (1.0 + threshold), mb * (1.0 + threshold));
+            let (lo, hi) = base
+                .iter()
+                .chain(new.iter())
+                .copied()
+                .filter(|v| v.is_finite())
+                .fold((band_lo, band_hi), |(a, b), v| (a.min(v), b.max(v)));
+            if !(lo.is_finite() && hi.is_finite() && mn.is_finite()) {
+                return String::new();
+            }
+            let s = Strip::new(lo, hi);
+            let mut body = format!(
+                "<rect x={:.1} y=0 width={:.1} height=18 fill=\"#eee\"/>",
+                s.x(band_lo),
+                s.x(band_hi) - s.x(band_lo)
+            );
+            let dots = base
+                .iter()
+                .map(|v| (v, 5.0, "#1f77b4"))
+                .chain(new.iter().map(|v| (v, 13.0, "#ff7f0e")));
+            for (v, y, c) in dots {
+                body += &format!("<circle cx={:.1} cy={y} r=1.8 fill=\"{c}\"/>", s.x(*v));
+            }
+            body += &format!(
+                "<line x1={0:.1} x2={0:.1} y1=0 y2=9 stroke=\"#1f77b4\" stroke-width=2/><line x1={1:.1} x2={1:.1} y1=9 y2=18 stroke=\"#ff7f0e\" stroke-width=2/>",
+                s.x(mb),
+                s.x(mn)
+            );
+            Strip::svg(&body)
+        }
+    }
+}
+
 /// Every `result.json` under `root`, by its folder relative to `root`. In a
 /// `reproduce` output folder (one with a `manifest.json`) only the runs its manifest
 /// lists as done count, so stale runs of an earlier reproduction into the same folder
@@ -343,6 +522,17 @@ pub fn compare(args: &CompareArgs) -> Result<Report> {
             bail!("{name}: expected a non-negative number (alpha: in (0, 1)), got {v}");
         }
     }
+    if let Some(page) = &args.html {
+        for (folder, what) in [(&args.base, "BASE"), (&args.new, "NEW")] {
+            if is_inside(page, folder) {
+                bail!(
+                    "--html {}: inside {what} ({}); compare never writes into the folders it reads",
+                    page.display(),
+                    folder.display()
+                );
+            }
+        }
+    }
     let base = collect_results(&args.base).context("BASE")?;
     let new = collect_results(&args.new).context("NEW")?;
     let mut report = Report::default();
@@ -374,6 +564,41 @@ pub fn compare(args: &CompareArgs) -> Result<Report> {
     Ok(report)
 }
 
+/// Whether `file` (which may not exist yet) would lie inside `folder`.
+fn is_inside(file: &Path, folder: &Path) -> bool {
+    let abs = |p: &Path| {
+        let p = if p.is_absolute() {
+            p.to_path_buf()
+        } else {
+            std::env::current_dir().map_or_else(|_| p.to_path_buf(), |c| c.join(p))
+        };
+        // Resolve what exists (symlinks, `..`), keep the rest as written.
+        let existing = p
+            .ancestors()
+            .find(|a| a.exists())
+            .unwrap_or(&p)
+            .to_path_buf();
+        let rest = p
+            .strip_prefix(&existing)
+            .map(Path::to_path_buf)
+            .unwrap_or_default();
+        existing.canonicalize().unwrap_or(existing).join(rest)
+    };
+    abs(file).starts_with(abs(folder))
+}
+
+/// Writes [`Report::html`] to `path` (atomically).
+pub fn write_html(path: &Path, args: &CompareArgs, report: &Report) -> Result<()> {
+    let page = report.html(
+        &args.base.display().to_string(),
+        &args.new.display().to_string(),
+        args.verbose,
+    );
+    caustics_metrics::atomic_write(path, page.as_bytes())
+        .with_context(|| format!("writing {}", path.display()))?;
+    Ok(())
+}
+
 fn line(run: &str, measure: &str, base: &str, new: &str, change: &str, verdict: Verdict) -> Line {
     Line {
         run: run.into(),
@@ -382,6 +607,7 @@ fn line(run: &str, measure: &str, base: &str, new: &str, change: &str, verdict: 
         new: new.into(),
         change: change.into(),
         detail: String::new(),
+        band: None,
         verdict,
     }
 }
@@ -495,6 +721,11 @@ fn compare_run(key: &str, b: &RunResult, n: &RunResult, args: &CompareArgs, out:
                     )
                 };
                 let mut l = line(key, k, &x.to_string(), &y.to_string(), &change, verdict);
+                l.band = Some(Band::Value {
+                    base: x as f64,
+                    new: y as f64,
+                    allowed: args.count_tolerance * x as f64,
+                });
                 l.detail = format!(
                     "deterministic: allowed ±{}% (--count-tolerance)",
                     crate::summary::num(100.0 * args.count_tolerance)
@@ -748,6 +979,7 @@ fn compare_figures(
                 continue;
             }
         };
+        let mut allowed_abs = args.error_tolerance;
         let (verdict, change, detail) = match gate {
             Gate::Flux => {
                 let d = y - x;
@@ -790,6 +1022,7 @@ fn compare_figures(
                     format!("{:+.2}%", 100.0 * (y - x) / x.abs().max(1e-300))
                 };
                 let detail = format!("allowed ±{}", crate::summary::num(allowed));
+                allowed_abs = allowed;
                 (verdict, change, detail)
             }
         };
@@ -802,6 +1035,11 @@ fn compare_figures(
             verdict,
         );
         l.detail = detail;
+        l.band = Some(Band::Value {
+            base: x,
+            new: y,
+            allowed: allowed_abs,
+        });
         out.push(l);
     }
 }
@@ -839,5 +1077,17 @@ pub fn compare_timing(key: &str, name: &str, b: &Summary, n: &Summary, args: &Co
         verdict,
     );
     l.detail = format!("{test}, threshold {:.0}%", 100.0 * args.time_threshold);
+    let samples = |x: &Summary| {
+        if x.values.is_empty() {
+            vec![x.p10, x.median, x.p90]
+        } else {
+            x.values.clone()
+        }
+    };
+    l.band = Some(Band::Samples {
+        base: samples(b),
+        new: samples(n),
+        threshold: args.time_threshold,
+    });
     l
 }

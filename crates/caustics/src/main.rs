@@ -125,13 +125,17 @@ fn main() -> ExitCode {
             println!("merged into {}", dir.display());
             ExitCode::SUCCESS
         }),
-        Command::Compare(args) => caustics::compare::compare(&args).map(|r| {
+        Command::Compare(args) => caustics::compare::compare(&args).and_then(|r| {
             if args.wide {
                 print!("{}", r.wide_table(args.verbose));
             } else {
                 print!("{}", r.table(args.verbose));
             }
-            ExitCode::from(r.exit_code())
+            if let Some(page) = &args.html {
+                caustics::compare::write_html(page, &args, &r)?;
+                println!("comparison page: {}", page.display());
+            }
+            Ok(ExitCode::from(r.exit_code()))
         }),
         Command::Report(args) => caustics::report::report(&args).map(|index| {
             println!("report: {}", index.display());

@@ -128,6 +128,7 @@ fn args(base: &Path, new: &Path) -> CompareArgs {
         verbose: false,
         wide: false,
         across_adapters: false,
+        html: None,
     }
 }
 
@@ -680,4 +681,44 @@ fn in_a_reproduce_folder_only_the_manifest_runs_count() {
         "{}",
         r.table(true)
     );
+}
+
+/// `--html FILE`: a static page of the comparison with each measure's band drawn (the
+/// only file compare writes); a page inside BASE or NEW is refused before any reading.
+#[test]
+fn the_html_page_shows_bands_and_is_never_written_into_the_inputs() {
+    let base = template();
+    let mut new = base.clone();
+    set_times(&mut new, 10.0, 1.1);
+    new["fragments"]["method_total"] = (new["fragments"]["method_total"]
+        .as_u64()
+        .expect("fragments")
+        + 1)
+    .into();
+    let (t, a) = pair(&base, &new);
+    let page = t.path().join("diff.html");
+    let r = compare(&a).expect("compare");
+    caustics::compare::write_html(&page, &a, &r).expect("html");
+    let html = std::fs::read_to_string(&page).expect("page");
+    assert!(
+        html.contains("<tr class=REGRESSION><td>method GPU ms"),
+        "{html}"
+    );
+    assert!(
+        html.contains("<tr class=REGRESSION><td>fragments (method)"),
+        "{html}"
+    );
+    // A timing strip draws every frame of both runs; a count its band and new value.
+    assert!(html.matches("<circle").count() >= 40, "{html}");
+    assert!(html.contains("<rect"), "{html}");
+    assert!(html.contains("Mann-Whitney"), "{html}");
+
+    let inside = a.base.join("diff.html");
+    let e = compare(&CompareArgs {
+        html: Some(inside.clone()),
+        ..a.clone()
+    })
+    .expect_err("inside BASE");
+    assert!(format!("{e:#}").contains("inside BASE"), "{e:#}");
+    assert!(!inside.exists());
 }

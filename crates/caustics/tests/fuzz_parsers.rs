@@ -523,6 +523,7 @@ fn mutated_experiment_result_manifest_and_summary_files_never_panic_and_name_the
                     verbose: true,
                     wide: false,
                     across_adapters: false,
+                    html: None,
                 })
                 .map(|r| {
                     let _ = r.table(true);
@@ -567,6 +568,7 @@ fn mutated_experiment_result_manifest_and_summary_files_never_panic_and_name_the
                 caustics::report::report(&caustics::report::ReportArgs {
                     dir: sdir.clone(),
                     out: Some(t.join("report")),
+                    references: t.join("references"),
                 })?;
             }
             Ok(())

@@ -179,11 +179,23 @@ fn reproduce_then_shards_merged_equal_the_unsharded_run() {
     let index = caustics::report::report(&caustics::report::ReportArgs {
         dir: t.join("whole"),
         out: Some(t.join("report")),
+        references: t.join("references"),
     })
     .expect("report");
     let html = std::fs::read_to_string(&index).expect("index");
     assert!(
         html.contains("ring/pinhole/cube_size=32,samples=50") && html.contains("imaginary GPU")
+    );
+    // The landing page: the gallery shows the scene's reference beside the runs, the
+    // glossary every column and the methods' counters.
+    assert!(
+        html.contains("/references/ring_"),
+        "no reference image in the gallery"
+    );
+    assert!(html.contains("id=glossary") && html.contains("<dt>relMSE</dt>"));
+    assert!(
+        html.contains("data-ok=pending hidden"),
+        "the image check shows on the page"
     );
     let srcs: Vec<&str> = html
         .split("src=\"")
@@ -197,6 +209,7 @@ fn reproduce_then_shards_merged_equal_the_unsharded_run() {
     let e = caustics::report::report(&caustics::report::ReportArgs {
         dir: t.join("nothing-here"),
         out: Some(t.join("report2")),
+        references: t.join("references"),
     })
     .expect_err("no folder");
     assert!(format!("{e:#}").contains("nothing-here"), "{e:#}");
@@ -228,6 +241,7 @@ fn reproduce_then_shards_merged_equal_the_unsharded_run() {
         verbose: false,
         wide: false,
         across_adapters: false,
+        html: None,
     })
     .expect("compare");
     assert_eq!(report.regressions(), 0, "{}", report.table(true));
