@@ -6,6 +6,7 @@
 //! ([`reproduce`], [`summary`], [`plots`], the declared [`figures`]) and the regression gate `caustics compare`
 //! ([`compare`]) and the static HTML report ([`report`]) build on `run`.
 
+pub mod cli;
 pub mod compare;
 pub mod experiment;
 pub mod figure_spec;

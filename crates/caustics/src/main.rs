@@ -3,46 +3,10 @@
 use std::process::ExitCode;
 
 use anyhow::Result;
-use caustics::compare::CompareArgs;
-use caustics::reference_cmd::ReferenceArgs;
-use caustics::report::ReportArgs;
-use caustics::reproduce::{MergeArgs, ReproduceArgs};
-use caustics::run::{EXIT_SKIPPED, RunOptions, RunOutcome};
+use caustics::cli::{Cli, Command};
+use caustics::run::{EXIT_SKIPPED, RunOutcome};
 use caustics::{registry, run};
-use clap::{Parser, Subcommand};
-
-#[derive(Parser)]
-#[command(
-    name = "caustics",
-    version,
-    about = "Render, measure and score real-time caustics methods"
-)]
-struct Cli {
-    #[command(subcommand)]
-    command: Command,
-}
-
-#[derive(Subcommand)]
-enum Command {
-    /// List the built-in scenes and the methods with their parameters, defaults and counters.
-    List,
-    /// Render a scene with a method; write images, timings, fragment counts and errors.
-    Run(RunOptions),
-    /// Render the CPU reference of a scene (surface and volume caustics with standard
-    /// errors) into the reference cache that `run` scores against.
-    Reference(ReferenceArgs),
-    /// Run an experiment of bench/experiments (or `all`): every (scene, method,
-    /// parameter set) it names, then a summary (tables, plots, Bencher Metric Format).
-    Reproduce(ReproduceArgs),
-    /// Merge the output folders of `reproduce --shard k/n` into one.
-    Merge(MergeArgs),
-    /// Compare two result folders run by run; exit 2 on a regression, 3 when no pair
-    /// regressed but some pair is not comparable (other scene, resolution, method,
-    /// parameters or adapter).
-    Compare(CompareArgs),
-    /// Write a static HTML report (index.html + images) of reproduced experiments.
-    Report(ReportArgs),
-}
+use clap::Parser;
 
 fn list() {
     println!("scenes ({}):", caustics_scene::builtin_dir().display());

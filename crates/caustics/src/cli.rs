@@ -1,0 +1,46 @@
+//! The command line of the `caustics` binary (here, not in `main.rs`, so that tests can
+//! parse the README's commands with the binary's own parser).
+
+use clap::{Parser, Subcommand};
+
+use crate::compare::CompareArgs;
+use crate::reference_cmd::ReferenceArgs;
+use crate::report::ReportArgs;
+use crate::reproduce::{MergeArgs, ReproduceArgs};
+use crate::run::RunOptions;
+
+/// `caustics`.
+#[derive(Parser)]
+#[command(
+    name = "caustics",
+    version,
+    about = "Render, measure and score real-time caustics methods"
+)]
+pub struct Cli {
+    /// What to do.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// The subcommands.
+#[derive(Subcommand)]
+pub enum Command {
+    /// List the built-in scenes and the methods with their parameters, defaults and counters.
+    List,
+    /// Render a scene with a method; write images, timings, fragment counts and errors.
+    Run(RunOptions),
+    /// Render the CPU reference of a scene (surface and volume caustics with standard
+    /// errors) into the reference cache that `run` scores against.
+    Reference(ReferenceArgs),
+    /// Run an experiment of bench/experiments (or `all`): every (scene, method,
+    /// parameter set) it names, then a summary (tables, plots, Bencher Metric Format).
+    Reproduce(ReproduceArgs),
+    /// Merge the output folders of `reproduce --shard k/n` into one.
+    Merge(MergeArgs),
+    /// Compare two result folders run by run; exit 2 on a regression, 3 when no pair
+    /// regressed but some pair is not comparable (other scene, resolution, method,
+    /// parameters or adapter).
+    Compare(CompareArgs),
+    /// Write a static HTML report (index.html + images) of reproduced experiments.
+    Report(ReportArgs),
+}
