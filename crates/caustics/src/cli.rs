@@ -43,4 +43,11 @@ pub enum Command {
     Compare(CompareArgs),
     /// Write a static HTML report (index.html + images) of reproduced experiments.
     Report(ReportArgs),
+    /// Print the JSON Schema of a scene, experiment or result file (committed under
+    /// schemas/).
+    Schema {
+        /// Which file format.
+        #[arg(value_enum)]
+        kind: crate::schemas::SchemaKind,
+    },
 }

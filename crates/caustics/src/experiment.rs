@@ -73,8 +73,12 @@ pub enum ExperimentError {
 type Result<T> = std::result::Result<T, ExperimentError>;
 
 /// The experiment file as written (before expansion).
-#[derive(Clone, Debug, Serialize, Deserialize)]
+#[derive(Clone, Debug, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
+#[schemars(
+    title = "caustics-bench experiment",
+    description = "An experiment file of caustics-bench (bench/experiments/README.md): scenes × methods × parameter sweeps at a resolution, frames, a reference budget, the paper's numbers and the figures to draw."
+)]
 pub struct ExperimentFile {
     /// Must equal the file stem.
     pub name: String,
@@ -125,7 +129,7 @@ fn default_score_grid() -> u32 {
 }
 
 /// Image size: a scale of each scene's camera, or an absolute size.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(untagged, try_from = "RawResolution")]
 pub enum Resolution {
     /// Width and height in pixels.
@@ -143,7 +147,7 @@ pub enum Resolution {
 }
 
 /// What a `resolution` object may hold; exactly one of the two forms.
-#[derive(Deserialize)]
+#[derive(Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 struct RawResolution {
     width: Option<u32>,
@@ -183,7 +187,7 @@ impl Resolution {
 }
 
 /// Photons for references rendered on demand.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct ReferenceBudget {
     /// Photons per reference.
@@ -204,7 +208,7 @@ fn sixteen() -> u32 {
 }
 
 /// Scenes × methods × parameter sweep.
-#[derive(Clone, Debug, Serialize, Deserialize)]
+#[derive(Clone, Debug, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RunGroup {
     /// Names the group in tables (default: `group<i>`).
@@ -229,7 +233,7 @@ pub struct RunGroup {
 }
 
 /// A list of names, or `"*"` for all.
-#[derive(Clone, Debug, Serialize, Deserialize)]
+#[derive(Clone, Debug, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(untagged)]
 pub enum Selection {
     /// `"*"`.
@@ -239,7 +243,7 @@ pub enum Selection {
 }
 
 /// The paper's own numbers.
-#[derive(Clone, Debug, Serialize, Deserialize)]
+#[derive(Clone, Debug, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Paper {
     /// The paper (file in the papers folder or a citation).
@@ -252,7 +256,7 @@ pub struct Paper {
 }
 
 /// One number from the paper, matched to runs by scene, method and a subset of params.
-#[derive(Clone, Debug, Serialize, Deserialize)]
+#[derive(Clone, Debug, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct PaperFigure {
     /// Scene name.

@@ -33,7 +33,7 @@ type Result<T> = std::result::Result<T, ExperimentError>;
 
 /// A figure as written in the experiment file. Which fields apply depends on `kind`
 /// (see the module documentation); a field of another kind is an error.
-#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+#[derive(Clone, Debug, Default, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct FigureDecl {
     /// File stem of the figure (`figures/<name>.png`): letters, digits, `_`, `-`.

@@ -22,5 +22,6 @@ pub mod reproduce;
 pub mod result;
 pub mod resume;
 pub mod run;
+pub mod schemas;
 pub mod stats;
 pub mod summary;

@@ -3,7 +3,7 @@
 use serde::{Deserialize, Serialize};
 
 /// Where and with what a run was made.
-#[derive(Clone, Debug, Serialize, Deserialize)]
+#[derive(Clone, Debug, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct Machine {
     /// Adapter name, e.g. "llvmpipe (LLVM 15.0.6, 256 bits)".
     pub adapter: String,
@@ -24,7 +24,7 @@ pub struct Machine {
 }
 
 /// The source the binary was built from.
-#[derive(Clone, Debug, Serialize, Deserialize)]
+#[derive(Clone, Debug, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct Build {
     /// `git rev-parse HEAD` of the working tree, or "unknown".
     pub commit: String,

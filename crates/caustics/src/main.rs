@@ -101,6 +101,10 @@ fn main() -> ExitCode {
             }
             Ok(ExitCode::from(r.exit_code()))
         }),
+        Command::Schema { kind } => {
+            print!("{}", caustics::schemas::schema_text(kind));
+            Ok(ExitCode::SUCCESS)
+        }
         Command::Report(args) => caustics::report::report(&args).map(|index| {
             println!("report: {}", index.display());
             ExitCode::SUCCESS

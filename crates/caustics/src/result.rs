@@ -17,8 +17,12 @@ use crate::stats::Summary;
 pub const SCHEMA_VERSION: u32 = 2;
 
 /// The whole result of one run.
-#[derive(Clone, Debug, Serialize, Deserialize)]
+#[derive(Clone, Debug, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
+#[schemars(
+    title = "caustics-bench run result",
+    description = "The result.json of one `caustics run`: build, machine, scene, method and parameters, timings per pass, fragments, counters, memory, images, tone mapping, scoring and errors against the reference (README, \"What caustics run writes\")."
+)]
 pub struct RunResult {
     /// [`SCHEMA_VERSION`] of the writer.
     pub schema_version: u32,
@@ -71,7 +75,7 @@ impl RunResult {
 
 /// The scoring frame (DESIGN "Measuring honestly": scoring is at the reference's
 /// footprint).
-#[derive(Clone, Debug, Serialize, Deserialize)]
+#[derive(Clone, Debug, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct ScoringInfo {
     /// N of the N×N sub-pixel camera offsets (stratum centres) averaged per pixel.
@@ -84,7 +88,7 @@ pub struct ScoringInfo {
 }
 
 /// The scene as run.
-#[derive(Clone, Debug, Serialize, Deserialize)]
+#[derive(Clone, Debug, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct SceneInfo {
     /// Scene name.
@@ -101,7 +105,7 @@ pub struct SceneInfo {
 }
 
 /// The method as run.
-#[derive(Clone, Debug, Serialize, Deserialize)]
+#[derive(Clone, Debug, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct MethodRun {
     /// Registry name.
@@ -111,7 +115,7 @@ pub struct MethodRun {
 }
 
 /// Frame counts.
-#[derive(Clone, Debug, Serialize, Deserialize)]
+#[derive(Clone, Debug, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct FrameCounts {
     /// Warm-up frames, not measured.
@@ -123,7 +127,7 @@ pub struct FrameCounts {
 }
 
 /// GPU times.
-#[derive(Clone, Debug, Serialize, Deserialize)]
+#[derive(Clone, Debug, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Timing {
     /// Whether the adapter gives timestamps; without them every `gpu_ms` is absent.
@@ -144,7 +148,7 @@ pub struct Timing {
 }
 
 /// GPU time of one named pass.
-#[derive(Clone, Debug, Serialize, Deserialize)]
+#[derive(Clone, Debug, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct PassTiming {
     /// "<owner>/<pass>".
@@ -154,7 +158,7 @@ pub struct PassTiming {
 }
 
 /// Pipeline statistics of one named pass in the count frame.
-#[derive(Clone, Debug, Serialize, Deserialize)]
+#[derive(Clone, Debug, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct PassFragments {
     /// "<owner>/<pass>".
@@ -170,7 +174,7 @@ pub struct PassFragments {
 }
 
 /// Fragments shaded.
-#[derive(Clone, Debug, Serialize, Deserialize)]
+#[derive(Clone, Debug, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Fragments {
     /// Per pass.
@@ -188,7 +192,7 @@ pub struct Fragments {
 }
 
 /// GPU memory.
-#[derive(Clone, Debug, Serialize, Deserialize)]
+#[derive(Clone, Debug, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Memory {
     /// Owned by the method.
@@ -198,7 +202,7 @@ pub struct Memory {
 }
 
 /// Tone mapping used for PNGs and LDR FLIP.
-#[derive(Clone, Debug, Serialize, Deserialize)]
+#[derive(Clone, Debug, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct ToneMapInfo {
     /// Linear radiance is multiplied by this, clamped to [0, 1], then sRGB-encoded.
@@ -214,7 +218,7 @@ pub struct ToneMapInfo {
 }
 
 /// Errors of the caustic images against a reference.
-#[derive(Clone, Debug, Serialize, Deserialize)]
+#[derive(Clone, Debug, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct ErrorReport {
     /// The reference surface caustic image: from the cache, its path inside the cache

@@ -3,7 +3,7 @@
 use serde::{Deserialize, Serialize};
 
 /// Median and 10th/90th percentiles over measured frames, and the samples themselves.
-#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 pub struct Summary {
     /// Median.
     pub median: f64,

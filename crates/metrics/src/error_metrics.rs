@@ -123,7 +123,7 @@ pub fn best_scale(test: &HdrImage, reference: &HdrImage) -> Result<(f64, f64), M
 /// `psnr_db` is `+inf` for identical images; since JSON has no infinity it is serialized as
 /// the string `"inf"` (and `"-inf"`, `"nan"`), and a number or such a string is accepted
 /// when reading.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct Errors {
     /// [`rmse`], W·m⁻²·sr⁻¹.
     pub rmse: f64,
@@ -132,6 +132,7 @@ pub struct Errors {
     /// [`psnr`] of the display-referred images ([`ToneMap::display`], peak 1), dB.
     /// Taken after tone mapping so that a hot caustic focus does not set the peak.
     #[serde(with = "non_finite_f64")]
+    #[schemars(schema_with = "non_finite_f64::schema")]
     pub psnr_db: f64,
     /// [`ssim`](crate::ssim) of the display-referred luminance (range 1), in `[-1, 1]`,
     /// 1 = identical.
@@ -256,6 +257,13 @@ pub fn all_errors(
 mod non_finite_f64 {
     use serde::de::{self, Visitor};
     use serde::{Deserializer, Serializer};
+
+    /// A number, or one of the strings non-finite values are written as.
+    pub(super) fn schema(_: &mut schemars::SchemaGenerator) -> schemars::Schema {
+        schemars::json_schema!({
+            "oneOf": [{"type": "number"}, {"enum": ["inf", "-inf", "nan"]}]
+        })
+    }
 
     pub(super) fn serialize<S: Serializer>(v: &f64, s: S) -> Result<S::Ok, S::Error> {
         if v.is_finite() {

@@ -297,7 +297,7 @@ pub fn format_value(v: f64) -> String {
 }
 
 /// A fill-rate histogram, see [`histogram`].
-#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct Histogram {
     /// Buckets in increasing order of count, from 0 up to the one holding the maximum.
     pub buckets: Vec<HistogramBucket>,
@@ -311,7 +311,7 @@ impl Histogram {
 }
 
 /// One bucket of a [`Histogram`]: the pixels whose count lies in `min_count..=max_count`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct HistogramBucket {
     /// Smallest count in the bucket (inclusive).
     pub min_count: u32,

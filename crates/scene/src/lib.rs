@@ -171,6 +171,13 @@ impl Scene {
     }
 }
 
+/// The JSON Schema (draft 2020-12) of a scene file, generated from the types that read
+/// it (committed as `schemas/scene.schema.json`; the parser checks more than it can
+/// say: finite numbers, unit vectors, mesh files).
+pub fn json_schema() -> serde_json::Value {
+    serde_json::to_value(raw::scene_schema()).unwrap_or(serde_json::Value::Null)
+}
+
 /// The folder of the built-in scenes: `<workspace>/scenes`.
 pub fn builtin_dir() -> PathBuf {
     let manifest = Path::new(env!("CARGO_MANIFEST_DIR"));

@@ -18,25 +18,31 @@ use serde_json::value::RawValue;
 use crate::SceneError;
 
 /// The top level of a scene file.
-#[derive(Deserialize)]
+#[derive(Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
+#[schemars(
+    title = "caustics-bench scene",
+    description = "A scene file of caustics-bench: camera, lights, optional medium, named materials and objects (README, \"Scene files\"). Units: metres, W/m² (directional irradiance), W/sr (point and spot intensity). The loader checks more than this schema says (finite values, non-degenerate vectors, mesh files, limits)."
+)]
 pub(crate) struct RawScene<'a> {
     pub(crate) name: String,
     #[serde(default)]
     pub(crate) description: Option<String>,
     pub(crate) camera: RawCamera,
     #[serde(borrow)]
+    #[schemars(with = "Vec<LightSchema>")]
     pub(crate) lights: Vec<&'a RawValue>,
     #[serde(default)]
     pub(crate) medium: Option<RawMedium>,
     #[serde(default, borrow)]
+    #[schemars(with = "std::collections::BTreeMap<String, MaterialSchema>")]
     pub(crate) materials: UniqueMap<'a>,
     #[serde(borrow)]
     pub(crate) objects: Vec<RawObject<'a>>,
 }
 
 /// `"camera"`.
-#[derive(Deserialize)]
+#[derive(Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawCamera {
     pub(crate) eye: [f32; 3],
@@ -55,7 +61,7 @@ fn default_up() -> [f32; 3] {
 }
 
 /// `"medium"`.
-#[derive(Deserialize)]
+#[derive(Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawMedium {
     pub(crate) sigma_s: [f32; 3],
@@ -65,10 +71,11 @@ pub(crate) struct RawMedium {
 }
 
 /// One entry of `"objects"`.
-#[derive(Deserialize)]
+#[derive(Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawObject<'a> {
     #[serde(borrow)]
+    #[schemars(with = "ShapeSchema")]
     pub(crate) shape: &'a RawValue,
     #[serde(default)]
     pub(crate) material: Option<String>,
@@ -113,6 +120,54 @@ struct Tag {
     kind: String,
 }
 
+// Schema-only mirrors of the tagged values (parsing goes through `RawLight`,
+// `RawMaterial` and `RawShape`, which read `"type"` first so that errors keep their path).
+#[derive(schemars::JsonSchema)]
+#[serde(tag = "type", rename_all = "snake_case")]
+#[schemars(
+    rename = "Light",
+    description = "A light, by \"type\": directional (direction, irradiance in W/m²), point (position, intensity in W/sr) or spot (position, direction, intensity in W/sr, cone_deg, optional falloff_deg)."
+)]
+#[allow(dead_code)]
+enum LightSchema {
+    Directional(RawDirectional),
+    Point(RawPoint),
+    Spot(RawSpot),
+}
+
+#[derive(schemars::JsonSchema)]
+#[serde(tag = "type", rename_all = "snake_case")]
+#[schemars(
+    rename = "Material",
+    description = "A material, by \"type\": diffuse (albedo), dielectric (ior) or mirror (reflectance)."
+)]
+#[allow(dead_code)]
+enum MaterialSchema {
+    Diffuse(RawDiffuse),
+    Dielectric(RawDielectric),
+    Mirror(RawMirror),
+}
+
+#[derive(schemars::JsonSchema)]
+#[serde(tag = "type", rename_all = "snake_case")]
+#[schemars(
+    rename = "Shape",
+    description = "A shape, by \"type\": sphere, quad, heightfield (with optional waves), cylinder (open) or mesh (an OBJ or glTF file relative to the scene file, with an optional transform). Metres throughout."
+)]
+#[allow(dead_code)]
+enum ShapeSchema {
+    Sphere(RawSphere),
+    Quad(RawQuad),
+    Heightfield(RawHeightfield),
+    Cylinder(RawCylinder),
+    Mesh(RawMesh),
+}
+
+/// The JSON Schema (draft 2020-12) of a scene file, from the types that read it.
+pub(crate) fn scene_schema() -> schemars::Schema {
+    schemars::schema_for!(RawScene<'static>)
+}
+
 /// `"lights"` entries.
 pub(crate) enum RawLight {
     Directional(RawDirectional),
@@ -120,28 +175,31 @@ pub(crate) enum RawLight {
     Spot(RawSpot),
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawDirectional {
     #[serde(rename = "type")]
+    #[schemars(skip)]
     _kind: IgnoredAny,
     pub(crate) direction: [f32; 3],
     pub(crate) irradiance: [f32; 3],
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawPoint {
     #[serde(rename = "type")]
+    #[schemars(skip)]
     _kind: IgnoredAny,
     pub(crate) position: [f32; 3],
     pub(crate) intensity: [f32; 3],
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawSpot {
     #[serde(rename = "type")]
+    #[schemars(skip)]
     _kind: IgnoredAny,
     pub(crate) position: [f32; 3],
     pub(crate) direction: [f32; 3],
@@ -158,26 +216,29 @@ pub(crate) enum RawMaterial {
     Mirror(RawMirror),
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawDiffuse {
     #[serde(rename = "type")]
+    #[schemars(skip)]
     _kind: IgnoredAny,
     pub(crate) albedo: [f32; 3],
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawDielectric {
     #[serde(rename = "type")]
+    #[schemars(skip)]
     _kind: IgnoredAny,
     pub(crate) ior: f32,
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawMirror {
     #[serde(rename = "type")]
+    #[schemars(skip)]
     _kind: IgnoredAny,
     pub(crate) reflectance: [f32; 3],
 }
@@ -191,29 +252,32 @@ pub(crate) enum RawShape {
     Mesh(RawMesh),
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawSphere {
     #[serde(rename = "type")]
+    #[schemars(skip)]
     _kind: IgnoredAny,
     pub(crate) center: [f32; 3],
     pub(crate) radius: f32,
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawQuad {
     #[serde(rename = "type")]
+    #[schemars(skip)]
     _kind: IgnoredAny,
     pub(crate) center: [f32; 3],
     pub(crate) normal: [f32; 3],
     pub(crate) size: [f32; 2],
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawHeightfield {
     #[serde(rename = "type")]
+    #[schemars(skip)]
     _kind: IgnoredAny,
     pub(crate) center: [f32; 3],
     pub(crate) size: [f32; 2],
@@ -222,7 +286,7 @@ pub(crate) struct RawHeightfield {
     pub(crate) waves: Vec<RawWave>,
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawWave {
     pub(crate) amplitude: f32,
@@ -232,10 +296,11 @@ pub(crate) struct RawWave {
     pub(crate) phase: f32,
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawCylinder {
     #[serde(rename = "type")]
+    #[schemars(skip)]
     _kind: IgnoredAny,
     pub(crate) center: [f32; 3],
     pub(crate) axis: [f32; 3],
@@ -243,10 +308,11 @@ pub(crate) struct RawCylinder {
     pub(crate) height: f32,
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawMesh {
     #[serde(rename = "type")]
+    #[schemars(skip)]
     _kind: IgnoredAny,
     pub(crate) path: String,
     #[serde(default)]
@@ -254,7 +320,7 @@ pub(crate) struct RawMesh {
 }
 
 /// `"transform"` of a mesh: `translate`, `rotate_deg` (XYZ Euler), uniform `scale`.
-#[derive(Deserialize)]
+#[derive(Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawTransform {
     #[serde(default)]
