@@ -18,7 +18,7 @@ use crate::figure_spec::{
     value_text,
 };
 use crate::plots::{
-    GUIDE, INK, PALETTE, Plot, Scale, Series, Style, colour, finish, plot_err, scale_for, scatter,
+    GUIDE, INK, PALETTE, Plot, Scale, Series, Style, colour, plot_err, scale_for, scatter,
 };
 use crate::summary::{Row, Summary, num};
 
@@ -142,10 +142,15 @@ pub fn draw(
     if fig_dir.is_dir() {
         for entry in std::fs::read_dir(&fig_dir)?.flatten() {
             let name = entry.file_name().to_string_lossy().into_owned();
+            // An SVG stays with its PNG.
+            let png = match name.strip_suffix(".svg") {
+                Some(stem) => format!("{stem}.png"),
+                None => name.clone(),
+            };
             let kept = out
                 .iter()
-                .any(|d| d.file.as_deref() == Some(&format!("figures/{name}")));
-            if name.ends_with(".png") && !kept {
+                .any(|d| d.file.as_deref() == Some(&format!("figures/{png}")));
+            if (name.ends_with(".png") || name.ends_with(".svg")) && !kept {
                 std::fs::remove_file(entry.path())?;
             }
         }
@@ -617,27 +622,55 @@ fn ratio_bars(
     bars: &[(String, f64, [u8; 3])],
     caption: &str,
 ) -> Result<()> {
-    let bar_h = 12i32;
     let label_w = bars
         .iter()
         .map(|b| text_width(&b.0) as i32)
         .max()
         .unwrap_or(0)
         + 16;
-    let half = 220i32;
-    let (w, h) = (
-        (label_w + 2 * half + 70).max(text_width(title) as i32 + 16) as u32,
-        (44 + bars.len() as i32 * (bar_h + 4) + 24) as u32,
-    );
-    let span = bars
-        .iter()
-        .map(|b| b.1.log10().abs())
-        .fold(1.25f64.log10(), f64::max);
-    let centre = label_w + half;
-    let mut buf = vec![255u8; (w * h * 3) as usize];
-    let mut text: crate::plots::Labels = vec![(8, 8, title.to_owned(), false)];
-    {
-        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
+    std::fs::create_dir_all(path.parent().unwrap_or(Path::new(".")))?;
+    crate::plots::render(
+        path,
+        &RatioBars {
+            title,
+            bars,
+            label_w,
+        },
+        caption,
+    )
+}
+
+/// The shapes of [`ratio_bars`].
+struct RatioBars<'a> {
+    title: &'a str,
+    bars: &'a [(String, f64, [u8; 3])],
+    label_w: i32,
+}
+
+impl RatioBars<'_> {
+    const BAR_H: i32 = 12;
+    const HALF: i32 = 220;
+}
+
+impl crate::plots::Shapes for RatioBars<'_> {
+    fn size(&self) -> (u32, u32) {
+        (
+            (self.label_w + 2 * Self::HALF + 70).max(text_width(self.title) as i32 + 16) as u32,
+            (44 + self.bars.len() as i32 * (Self::BAR_H + 4) + 24) as u32,
+        )
+    }
+
+    fn draw<DB: DrawingBackend>(
+        &self,
+        root: &DrawingArea<DB, plotters::coord::Shift>,
+    ) -> Result<crate::plots::Labels> {
+        let (bar_h, half, label_w, bars) = (Self::BAR_H, Self::HALF, self.label_w, self.bars);
+        let span = bars
+            .iter()
+            .map(|b| b.1.log10().abs())
+            .fold(1.25f64.log10(), f64::max);
+        let centre = label_w + half;
+        let mut text: crate::plots::Labels = vec![(8, 8, self.title.to_owned(), false)];
         root.fill(&WHITE).map_err(plot_err)?;
         let top = 30;
         for (i, (label, q, c)) in bars.iter().enumerate() {
@@ -683,10 +716,8 @@ fn ratio_bars(
             hi,
             false,
         ));
-        root.present().map_err(plot_err)?;
+        Ok(text)
     }
-    std::fs::create_dir_all(path.parent().unwrap_or(Path::new(".")))?;
-    finish(buf, w, h, &text, caption, path)
 }
 
 /// A number in a table: counts as integers, others as [`num`] writes them.

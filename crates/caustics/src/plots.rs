@@ -23,6 +23,7 @@ use anyhow::{Result, anyhow};
 use caustics_metrics::{
     GLYPH_H, HeatmapOptions, Rgb8Image, draw_text, draw_text_vertical, heatmap_with, text_width,
 };
+use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use crate::summary::{Row, Summary, num};
@@ -292,6 +293,82 @@ impl Series {
 /// Text to draw after plotters is done: (x, y, text, vertical).
 pub(crate) type Labels = Vec<(i32, i32, String, bool)>;
 
+/// A plot's shapes, drawn by plotters on any backend (the PNG's bitmap, the SVG), with
+/// the labels to set over them ([`render`]).
+pub(crate) trait Shapes {
+    /// Width and height in pixels, without the caption.
+    fn size(&self) -> (u32, u32);
+    /// Draws the shapes onto `root` (white first) and returns the labels.
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<Labels>;
+}
+
+/// Writes `shapes` as `path` (PNG, labels rasterized in DejaVu Sans) and beside it the
+/// same plot as SVG (`path` with `.svg`: vector shapes, labels as `<text>` in DejaVu
+/// Sans, for papers), both with `caption` under them.
+pub(crate) fn render(path: &Path, shapes: &impl Shapes, caption: &str) -> Result<()> {
+    let (w, h) = shapes.size();
+    let mut buf = vec![255u8; (w * h * 3) as usize];
+    let labels = {
+        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
+        let labels = shapes.draw(&root)?;
+        root.present().map_err(plot_err)?;
+        labels
+    };
+    finish(buf, w, h, &labels, caption, path)?;
+    let width = w.max(text_width(caption) + 16);
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (width, h + CAPTION_H)).into_drawing_area();
+        root.fill(&WHITE).map_err(plot_err)?;
+        let (top, _) = root.split_vertically(h);
+        shapes.draw(&top)?;
+        root.present().map_err(plot_err)?;
+    }
+    let mut text = String::new();
+    let esc = |t: &str| {
+        t.replace('&', "&amp;")
+            .replace('<', "&lt;")
+            .replace('>', "&gt;")
+    };
+    let ink = |c: [u8; 3]| format!("#{:02x}{:02x}{:02x}", c[0], c[1], c[2]);
+    // The raster text's geometry: `y` is the capitals' top, the baseline GLYPH_H below.
+    for (x, y, t, vertical) in &labels {
+        let (x, y) = ((*x).max(0), (*y).max(0));
+        let base = GLYPH_H as i32;
+        text += &if *vertical {
+            // Reading upwards from row y: the baseline on column x + GLYPH_H.
+            format!(
+                "<text transform=\"translate({} {y}) rotate(-90)\" {SVG_FONT} fill=\"{}\">{}</text>",
+                x + base,
+                ink(INK),
+                esc(t)
+            )
+        } else {
+            format!(
+                "<text x=\"{x}\" y=\"{}\" {SVG_FONT} fill=\"{}\">{}</text>",
+                y + base,
+                ink(INK),
+                esc(t)
+            )
+        };
+    }
+    text += &format!(
+        "<text x=\"8\" y=\"{}\" {SVG_FONT} fill=\"{}\">{}</text>",
+        h + 3 + GLYPH_H,
+        ink(GUIDE),
+        esc(caption)
+    );
+    let Some(end) = svg.rfind("</svg>") else {
+        anyhow::bail!("plotters wrote no closing </svg>");
+    };
+    svg.insert_str(end, &text);
+    caustics_metrics::atomic_write(&path.with_extension("svg"), svg.as_bytes())?;
+    Ok(())
+}
+
+/// The SVG labels' font: the PNG's (DejaVu Sans at 12 px ascent-to-descent = 10.3 px em).
+const SVG_FONT: &str = "font-family=\"DejaVu Sans, Verdana, sans-serif\" font-size=\"10.3\"";
+
 /// Rows under every plot and figure for its caption.
 pub(crate) const CAPTION_H: u32 = 16;
 
@@ -380,7 +457,7 @@ pub(crate) struct Plot<'a> {
 }
 
 /// A scatter plot with axes, ticks, labels, a legend as wide as its longest entry and a
-/// caption. Points a log axis cannot show (≤ 0) are left out.
+/// caption, as PNG and SVG. Points a log axis cannot show (≤ 0) are left out.
 pub(crate) fn scatter(path: &Path, plot: &Plot<'_>, series: &[Series]) -> Result<()> {
     let legend_w = series
         .iter()
@@ -388,16 +465,38 @@ pub(crate) fn scatter(path: &Path, plot: &Plot<'_>, series: &[Series]) -> Result
         .max()
         .unwrap_or(0);
     let margin_right = (legend_w + 40).max(120);
-    let (w, h) = ((510 + margin_right) as u32, 420u32);
     let all: Vec<(f64, f64)> = series.iter().flat_map(|s| s.points.clone()).collect();
-    let xa = Axis::fit(&all.iter().map(|p| p.0).collect::<Vec<_>>(), plot.x.1);
-    let ya = Axis::fit(&all.iter().map(|p| p.1).collect::<Vec<_>>(), plot.y.1);
-    let mut buf = vec![255u8; (w * h * 3) as usize];
-    let mut labels: Labels = Vec::new();
-    {
-        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
+    let shapes = Scatter {
+        plot,
+        series,
+        xa: Axis::fit(&all.iter().map(|p| p.0).collect::<Vec<_>>(), plot.x.1),
+        ya: Axis::fit(&all.iter().map(|p| p.1).collect::<Vec<_>>(), plot.y.1),
+        margin_right,
+    };
+    render(path, &shapes, plot.caption)
+}
+
+/// The shapes of [`scatter`].
+struct Scatter<'a> {
+    plot: &'a Plot<'a>,
+    series: &'a [Series],
+    xa: Axis,
+    ya: Axis,
+    margin_right: i32,
+}
+
+impl Shapes for Scatter<'_> {
+    fn size(&self) -> (u32, u32) {
+        ((510 + self.margin_right) as u32, 420)
+    }
+
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<Labels> {
+        let (w, h) = self.size();
+        let (plot, series, xa, ya, margin_right) =
+            (self.plot, self.series, self.xa, self.ya, self.margin_right);
+        let mut labels: Labels = Vec::new();
         root.fill(&WHITE).map_err(plot_err)?;
-        let mut chart = ChartBuilder::on(&root)
+        let mut chart = ChartBuilder::on(root)
             .margin_top(28)
             .margin_right(margin_right)
             .margin_left(70)
@@ -495,24 +594,23 @@ pub(crate) fn scatter(path: &Path, plot: &Plot<'_>, series: &[Series]) -> Result
             }
             labels.push((lx + 16, ly - 3, s.name.clone(), false));
         }
-        root.present().map_err(plot_err)?;
+        labels.push((70, 10, plot.title.to_owned(), false));
+        let x_label = format!("{}{}", plot.x.0, if xa.log { " (log)" } else { "" });
+        labels.push((
+            70 + (w as i32 - 70 - margin_right) / 2 - text_width(&x_label) as i32 / 2,
+            h as i32 - 16,
+            x_label,
+            false,
+        ));
+        let y_label = format!("{}{}", plot.y.0, if ya.log { " (log)" } else { "" });
+        labels.push((
+            6,
+            h as i32 / 2 + text_width(&y_label) as i32 / 2,
+            y_label,
+            true,
+        ));
+        Ok(labels)
     }
-    labels.push((70, 10, plot.title.to_owned(), false));
-    let x_label = format!("{}{}", plot.x.0, if xa.log { " (log)" } else { "" });
-    labels.push((
-        70 + (w as i32 - 70 - margin_right) / 2 - text_width(&x_label) as i32 / 2,
-        h as i32 - 16,
-        x_label,
-        false,
-    ));
-    let y_label = format!("{}{}", plot.y.0, if ya.log { " (log)" } else { "" });
-    labels.push((
-        6,
-        h as i32 / 2 + text_width(&y_label) as i32 / 2,
-        y_label,
-        true,
-    ));
-    finish(buf, w, h, &labels, plot.caption, path)
 }
 
 /// The runs not beaten in both time and error by another run, sorted by time.
@@ -540,39 +638,67 @@ pub(crate) fn file_safe(s: &str) -> String {
         .collect()
 }
 
-/// Horizontal bars of the method's fragments, one per run.
+/// Horizontal bars of the method's fragments, one per run (PNG and SVG).
 fn fragments_plot(
     path: &Path,
     rows: &[(&Row, u64)],
     methods: &[String],
     caption: &str,
 ) -> Result<()> {
-    let bar_h = 12i32;
     let label_w = rows
         .iter()
         .map(|(r, _)| text_width(&bar_label(r)) as i32)
         .max()
         .unwrap_or(0)
         + 16;
-    let (w, h) = (
-        (label_w + 420) as u32,
-        (40 + rows.len() as i32 * (bar_h + 4) + 20) as u32,
-    );
-    let max = rows.iter().map(|r| r.1).max().unwrap_or(1).max(1) as f64;
-    let mut buf = vec![255u8; (w * h * 3) as usize];
-    let mut labels: Labels = vec![(
-        8,
-        10,
-        "fragments shaded by the method passes (count frame)".into(),
-        false,
-    )];
-    {
-        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
+    render(
+        path,
+        &FragmentBars {
+            rows,
+            methods,
+            label_w,
+        },
+        caption,
+    )
+}
+
+/// The shapes of [`fragments_plot`].
+struct FragmentBars<'a> {
+    rows: &'a [(&'a Row, u64)],
+    methods: &'a [String],
+    label_w: i32,
+}
+
+impl FragmentBars<'_> {
+    const BAR_H: i32 = 12;
+}
+
+impl Shapes for FragmentBars<'_> {
+    fn size(&self) -> (u32, u32) {
+        (
+            (self.label_w + 420) as u32,
+            (40 + self.rows.len() as i32 * (Self::BAR_H + 4) + 20) as u32,
+        )
+    }
+
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<Labels> {
+        let (bar_h, label_w) = (Self::BAR_H, self.label_w);
+        let max = self.rows.iter().map(|r| r.1).max().unwrap_or(1).max(1) as f64;
+        let mut labels: Labels = vec![(
+            8,
+            10,
+            "fragments shaded by the method passes (count frame)".into(),
+            false,
+        )];
         root.fill(&WHITE).map_err(plot_err)?;
         let span = 330.0;
-        for (i, (r, f)) in rows.iter().enumerate() {
+        for (i, (r, f)) in self.rows.iter().enumerate() {
             let y = 32 + i as i32 * (bar_h + 4);
-            let m = methods.iter().position(|m| *m == r.method).unwrap_or(0);
+            let m = self
+                .methods
+                .iter()
+                .position(|m| *m == r.method)
+                .unwrap_or(0);
             let len = ((*f as f64 / max) * span).round() as i32;
             root.draw(&Rectangle::new(
                 [(label_w, y), (label_w + len.max(1), y + bar_h)],
@@ -582,9 +708,8 @@ fn fragments_plot(
             labels.push((8, y + 2, bar_label(r), false));
             labels.push((label_w + len + 4, y + 2, num(*f as f64), false));
         }
-        root.present().map_err(plot_err)?;
+        Ok(labels)
     }
-    finish(buf, w, h, &labels, caption, path)
 }
 
 /// `text` broken at spaces into lines of at most `max_w` pixels (a word longer than that
@@ -911,7 +1036,13 @@ pub fn write_plots(dir: &Path, s: &Summary) -> Result<Vec<String>> {
     if dir.is_dir() {
         for entry in std::fs::read_dir(dir)?.flatten() {
             let name = entry.file_name().to_string_lossy().into_owned();
-            if name.ends_with(".png") && !written.contains(&format!("plots/{name}")) {
+            // An SVG stays with its PNG.
+            let png = match name.strip_suffix(".svg") {
+                Some(stem) => format!("{stem}.png"),
+                None => name.clone(),
+            };
+            let ours = name.ends_with(".png") || name.ends_with(".svg");
+            if ours && !written.contains(&format!("plots/{png}")) {
                 std::fs::remove_file(entry.path())?;
             }
         }
@@ -1018,6 +1149,18 @@ mod tests {
         )
         .expect("plot");
         let img = caustics_metrics::read_png(&p).expect("png");
+        // The SVG beside it: vector marks, the labels and caption as text.
+        let svg = std::fs::read_to_string(p.with_extension("svg")).expect("svg");
+        assert!(
+            svg.contains("<circle") && svg.contains("<polyline"),
+            "no marks in the SVG"
+        );
+        for t in ["title", long, "llvmpipe · 64×48", "y (log)"] {
+            assert!(
+                svg.contains(&format!(">{t}</text>")),
+                "{t:?} not in the SVG"
+            );
+        }
         // The legend's right margin holds its longest entry; the caption adds rows.
         assert!(img.width >= 510 + text_width(long) + 26, "{}", img.width);
         assert_eq!(img.height, 420 + CAPTION_H);

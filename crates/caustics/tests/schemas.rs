@@ -157,7 +157,9 @@ fn the_readme_json_examples_validate() {
                     let checked_as = if v.get("camera").is_some() {
                         scenes.validate(&v, scene).map_err(|e| format!("{e:#}"))
                     } else if v.get("runs").is_some() {
-                        experiments.validate(&v, experiment).map_err(|e| format!("{e:#}"))
+                        experiments
+                            .validate(&v, experiment)
+                            .map_err(|e| format!("{e:#}"))
                     } else {
                         Ok(())
                     };
