@@ -93,6 +93,8 @@ struct Axis {
     lo: f64,
     hi: f64,
     log: bool,
+    /// Every value is a whole number (a count, a level): ticks are whole too.
+    integer: bool,
 }
 
 impl Axis {
@@ -116,6 +118,7 @@ impl Axis {
             (lo, hi) = (0.0, 1.0);
         }
         let log = scale == Scale::Log;
+        let integer = shown.iter().all(|v| v.fract() == 0.0);
         if log {
             let (mut l, mut h) = (lo.log10(), hi.log10());
             if h - l < 0.3 {
@@ -128,6 +131,7 @@ impl Axis {
                 lo: 10f64.powf(l - pad),
                 hi: 10f64.powf(h + pad),
                 log,
+                integer,
             };
         }
         if hi - lo <= f64::EPSILON * hi.abs().max(1.0) {
@@ -144,6 +148,7 @@ impl Axis {
             },
             hi: hi + pad,
             log,
+            integer,
         }
     }
     fn map(&self, v: f64) -> f64 {
@@ -192,6 +197,12 @@ impl Axis {
             .map(|m| m * mag)
             .find(|s| *s >= raw)
             .unwrap_or(10.0 * mag);
+        // Counts and levels tick on whole numbers (no "1.5 levels").
+        let step = if self.integer {
+            step.max(1.0).round()
+        } else {
+            step
+        };
         let mut v = (self.lo / step).ceil() * step;
         let mut t = Vec::new();
         while v <= self.hi + 1e-9 * step {
@@ -1111,6 +1122,14 @@ mod tests {
             Scale::Linear
         );
         assert_eq!(scale_for("param:split_hit_rel", &[0.0, 0.1]), Scale::Linear);
+        // Whole-numbered values tick on whole numbers only.
+        let levels = Axis::fit(&[0.0, 1.0, 2.0, 3.0], Scale::Linear);
+        assert!(
+            levels.ticks().iter().all(|t| t.fract() == 0.0),
+            "{:?}",
+            levels.ticks()
+        );
+        assert!(levels.ticks().len() >= 3, "{:?}", levels.ticks());
         // A log axis of nothing positive falls back to linear rather than to nothing.
         assert!(!Axis::fit(&[0.0, 0.0], Scale::Log).log);
     }
