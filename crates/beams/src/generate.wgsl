@@ -361,7 +361,11 @@ fn scan(@builtin(local_invocation_index) lid: u32) {
         let children = scan_children[lid];
         let new_beams = scan_beams[lid];
         let capacity = u.max_beams;
-        let next = min(children, capacity);
+        // Children come four to a split at offsets that are multiples of 4, and `emit`
+        // writes a split's four only when all fit: the next list holds whole splits, so
+        // a capacity that is not a multiple of 4 must not count the slots of a split
+        // that was not written (they would be read as stale candidates).
+        let next = min(children, capacity - capacity % 4u);
         atomicAdd(&control[C_OVERFLOW_CANDIDATES], children - next);
         atomicStore(&control[C_NEXT_COUNT], next);
         let base = atomicLoad(&control[C_BEAM_TOTAL]);

@@ -346,6 +346,18 @@ fn overflow_is_counted_when_the_buffers_are_too_small() {
     let overflow = run.counter("overflow_candidates") + run.counter("overflow_beams");
     assert!(overflow > 0, "a 40-slot buffer held every beam");
     assert!(run.counter("beams") <= 40);
+    // A capacity that is not a multiple of 4 holds whole splits only: the next level
+    // never reads the slots of a split that did not fit (32 base candidates + children
+    // four at a time), and the children that did not fit are all counted.
+    c.beams.max_beams = 42;
+    let mut odd = Run::new(builtin("sphere_on_plane", 64, 48), &c);
+    odd.frame();
+    assert!(odd.counter("overflow_candidates") > 0);
+    assert_eq!(
+        odd.counter("candidates") % 4,
+        0,
+        "a partly written split was counted as candidates"
+    );
     // With room, nothing overflows.
     c.beams.max_beams = 4096;
     let mut roomy = Run::new(builtin("sphere_on_plane", 64, 48), &c);
