@@ -218,18 +218,8 @@ mod tests {
         let c = [0u32; CONTROL_WORDS];
         let mut names: Vec<String> = counters(&c, MAX_LEVELS, MAX_BOUNCES).into_keys().collect();
         names.extend(["hull_triangles".into(), "base_triangles".into()]);
-        for name in &names {
-            assert!(
-                COUNTER_DOCS.iter().any(|d| d.matches(name)),
-                "counter {name} has no entry in COUNTER_DOCS"
-            );
-        }
-        for d in COUNTER_DOCS {
-            assert!(
-                names.iter().any(|n| d.matches(n)),
-                "COUNTER_DOCS documents {}, which is never reported",
-                d.name
-            );
+        if let Err(e) = caustics_method::CounterDoc::check(COUNTER_DOCS, &names) {
+            panic!("{e}");
         }
     }
 

@@ -534,18 +534,8 @@ mod tests {
     fn every_triangle_counter_is_documented() {
         let mut names: Vec<&str> = TRI_REASONS.iter().map(|(_, n)| *n).collect();
         names.extend(["triangles", ORPHAN_COUNTER.1]);
-        for name in &names {
-            assert!(
-                CausticTriangles::COUNTERS.iter().any(|d| d.matches(name)),
-                "counter {name} has no doc"
-            );
-        }
-        for d in TRIANGLE_COUNTER_DOCS {
-            assert!(
-                names.iter().any(|n| d.matches(n)),
-                "TRIANGLE_COUNTER_DOCS documents {}, which is never reported",
-                d.name
-            );
+        if let Err(e) = caustics_method::CounterDoc::check(TRIANGLE_COUNTER_DOCS, &names) {
+            panic!("{e}");
         }
         assert_eq!(
             CausticTriangles::COUNTERS.len(),

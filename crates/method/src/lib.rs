@@ -214,6 +214,28 @@ impl CounterDoc {
                 .is_some_and(|n| !n.is_empty() && n.bytes().all(|b| b.is_ascii_digit()))
     }
 
+    /// Checks a list of docs against the counter names a method can report: every
+    /// name has a doc, and every doc is of a reported name (none is stale). The error
+    /// names each counter or doc at fault.
+    pub fn check<S: AsRef<str>>(docs: &[CounterDoc], reported: &[S]) -> Result<(), String> {
+        let mut faults = Vec::new();
+        for name in reported.iter().map(AsRef::as_ref) {
+            if !docs.iter().any(|d| d.matches(name)) {
+                faults.push(format!("counter {name} has no doc"));
+            }
+        }
+        for d in docs {
+            if !reported.iter().any(|n| d.matches(n.as_ref())) {
+                faults.push(format!("{} is documented but never reported", d.name));
+            }
+        }
+        if faults.is_empty() {
+            Ok(())
+        } else {
+            Err(faults.join("; "))
+        }
+    }
+
     /// `a` then `b`, as one array of `N` = `a.len() + b.len()` docs: a method's list
     /// from a shared crate's and its own (`const COUNTERS: &[CounterDoc] =
     /// &CounterDoc::concat::<{ SHARED.len() + OWN.len() }>(SHARED, OWN);`).
@@ -361,6 +383,27 @@ mod tests {
         name: "beams_level_N",
         doc: "beams per level",
     };
+
+    #[test]
+    fn check_finds_undocumented_and_stale_counters() {
+        let docs = [
+            CounterDoc {
+                name: "beams",
+                doc: "d",
+            },
+            CounterDoc {
+                name: "beams_level_N",
+                doc: "d",
+            },
+        ];
+        assert!(CounterDoc::check(&docs, &["beams", "beams_level_0", "beams_level_12"]).is_ok());
+        let e = CounterDoc::check(&docs, &["beams", "candidates"]).expect_err("faults");
+        assert!(e.contains("counter candidates has no doc"), "{e}");
+        assert!(
+            e.contains("beams_level_N is documented but never reported"),
+            "{e}"
+        );
+    }
 
     #[test]
     fn counter_doc_matches_exact_names_and_numbered_families() {

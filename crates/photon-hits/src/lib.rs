@@ -711,18 +711,8 @@ mod tests {
         names.push("photon_texels".into());
         names.push("photon_hits_fresnel_reflection".into());
         names.extend((1..=MAX_BOUNCES).map(|k| format!("photon_hits_bounce_{k}")));
-        for name in &names {
-            assert!(
-                COUNTER_DOCS.iter().any(|d| d.matches(name)),
-                "counter {name} has no entry in COUNTER_DOCS"
-            );
-        }
-        for d in COUNTER_DOCS {
-            assert!(
-                names.iter().any(|n| d.matches(n)),
-                "COUNTER_DOCS documents {}, which is never reported",
-                d.name
-            );
+        if let Err(e) = caustics_method::CounterDoc::check(COUNTER_DOCS, &names) {
+            panic!("{e}");
         }
     }
 

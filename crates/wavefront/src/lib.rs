@@ -640,15 +640,19 @@ mod tests {
     /// Every counter `Wavefront::counters` reports has a doc.
     #[test]
     fn every_counter_is_documented() {
-        let names = ["sheets", "source_vertices", "triangles", "bvh_triangles"]
+        let names: Vec<&str> = ["sheets", "source_vertices", "triangles", "bvh_triangles"]
             .into_iter()
             .chain(TRIANGLE_COUNTERS)
-            .chain(VERTEX_COUNTERS);
-        for name in names {
-            assert!(
-                COUNTER_DOCS.iter().any(|d| d.matches(name)),
-                "counter {name} has no doc"
-            );
+            .chain(VERTEX_COUNTERS)
+            .collect();
+        // `dropped_face_mismatch` is documented for older result files only.
+        let current: Vec<_> = COUNTER_DOCS
+            .iter()
+            .copied()
+            .filter(|d| d.name != "dropped_face_mismatch")
+            .collect();
+        if let Err(e) = caustics_method::CounterDoc::check(&current, &names) {
+            panic!("{e}");
         }
     }
 
