@@ -1,5 +1,32 @@
 //! `caustics`: render caustic scenes with real-time methods, measure and score them.
 
+/// `println!` and `print!` that never panic when stdout is closed early (`caustics list
+/// | head -1`): std's panic on a broken pipe. What cannot be written to a closed pipe is
+/// dropped; any other write error is reported on stderr.
+macro_rules! println {
+    ($($t:tt)*) => {{
+        use std::io::Write as _;
+        if let Err(e) = writeln!(std::io::stdout(), $($t)*) {
+            if e.kind() != std::io::ErrorKind::BrokenPipe {
+                eprintln!("error: writing to stdout: {e}");
+            }
+        }
+    }};
+}
+
+/// See [`println!`].
+#[allow(unused_macros)]
+macro_rules! print {
+    ($($t:tt)*) => {{
+        use std::io::Write as _;
+        if let Err(e) = write!(std::io::stdout(), $($t)*) {
+            if e.kind() != std::io::ErrorKind::BrokenPipe {
+                eprintln!("error: writing to stdout: {e}");
+            }
+        }
+    }};
+}
+
 use std::process::ExitCode;
 
 use anyhow::Result;

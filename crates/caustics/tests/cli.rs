@@ -249,3 +249,22 @@ fn mesh_limits_are_flags_and_the_refusal_names_them() {
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
 }
+
+/// `caustics list | head -1`: a reader that closes the pipe early is not a panic.
+#[test]
+fn a_closed_stdout_is_not_a_panic() {
+    for args in [&["list"][..], &["schema", "result"]] {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_caustics"))
+            .args(args)
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .expect("spawn");
+        // The reading end closed before the first write: every write meets a broken pipe.
+        drop(child.stdout.take());
+        let o = child.wait_with_output().expect("wait");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!err.contains("panicked"), "{args:?}: {err}");
+        assert_eq!(o.status.code(), Some(0), "{args:?}: {err}");
+    }
+}
