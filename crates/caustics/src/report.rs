@@ -524,17 +524,42 @@ fn figures_section(html: &mut String, s: &Summary, dir: &Path, out: &Path) -> Re
 
 const INTRO: &str = "<p>Every number below was measured by <code>caustics reproduce</code> on the adapter each section names: GPU time per pass from timestamp queries (median, 10th–90th percentile over the timed frames), fragments from pipeline-statistics queries, and errors of the caustic images against an unbiased CPU light tracer (the <em>reference</em>), scored on a pixel-averaged frame of 16 sub-pixel samples per pixel. On a software adapter (lavapipe) times are CPU times: compare ratios within one experiment, not absolute values. The <a href=#glossary>glossary</a> says what each column and counter is.</p>\n";
 
-/// Each experiment with its adapter(s), resolution(s) and run counts.
+/// Each experiment with its adapter(s), resolution(s) and run counts (the adapter once
+/// above the table when every experiment ran on the same one).
 fn experiments_table(html: &mut String, summaries: &[Summary]) {
-    html.push_str("<h2>Experiments</h2><table><tr><th>experiment</th><th>what it reproduces</th><th>paper</th><th>adapter</th><th>resolution</th><th>runs</th></tr>\n");
-    for s in summaries {
+    let one_adapter = summaries
+        .first()
+        .map(|s| &s.adapters)
+        .filter(|first| summaries.iter().all(|s| &s.adapters == *first));
+    html.push_str("<h2>Experiments</h2>\n");
+    if let Some(a) = one_adapter {
         let _ = writeln!(
             html,
-            "<tr><td><a href=\"#{0}\">{0}</a></td><td>{1}</td><td>{2}</td><td>{3}</td><td>{4}</td><td>{5} done, {6} skipped, {7} failed</td></tr>",
+            "<p class=meta>Every experiment ran on {}.</p>",
+            esc(&a.join("; "))
+        );
+    }
+    let _ = writeln!(
+        html,
+        "<table><tr><th>experiment</th><th>what it reproduces</th><th>paper</th>{}<th>resolution</th><th>runs</th></tr>",
+        if one_adapter.is_some() {
+            ""
+        } else {
+            "<th>adapter</th>"
+        }
+    );
+    for s in summaries {
+        let adapter = if one_adapter.is_some() {
+            String::new()
+        } else {
+            format!("<td>{}</td>", esc(&s.adapters.join("; ")))
+        };
+        let _ = writeln!(
+            html,
+            "<tr><td><a href=\"#{0}\">{0}</a></td><td>{1}</td><td>{2}</td>{adapter}<td>{3}</td><td>{4} done, {5} skipped, {6} failed</td></tr>",
             esc(&s.experiment),
             esc(&s.description),
             esc(s.paper.as_ref().map_or("–", |p| p.source.as_str())),
-            esc(&s.adapters.join("; ")),
             esc(&resolutions(&s.runs.iter().collect::<Vec<_>>()).join(", ")),
             s.done,
             s.skipped,
