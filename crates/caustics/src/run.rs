@@ -83,9 +83,14 @@ pub struct RunOptions {
     pub quick_reference_photons: u64,
 }
 
+/// Mean relative standard error per caustic pixel above which `run` says its reference
+/// is noisy (a quick reference at 1024×768 has ~30%).
+const NOISY_REFERENCE: f64 = 0.1;
+
 /// Photons of the quick reference `caustics run` renders when the cache has none: about
-/// 2–3 s on 2 cores for the analytic built-ins at 1024×768, 25 s for the 20k-triangle
-/// bumpy_glass; a mean relative standard error of a few percent over the caustic.
+/// 3 s on 2 cores for water_pool at 1024×768 (mean relative standard error 30% per
+/// caustic pixel: a first look, which the run says is noisy), ~25 s for the
+/// 20k-triangle bumpy_glass.
 pub const QUICK_REFERENCE_PHOTONS: u64 = 20_000_000;
 
 /// How a run ended.
@@ -489,6 +494,13 @@ fn load_reference(o: &RunOptions, scene: &Scene, volume: bool) -> Result<Option<
         cached.meta.photons,
         100.0 * cached.meta.relative_stderr
     );
+    if cached.meta.relative_stderr > NOISY_REFERENCE {
+        eprintln!(
+            "note: that reference is noisy ({:.0}% mean relative standard error per caustic pixel): the errors below include its noise; `caustics reference --scene {} --photons 200000000` renders a converged one over it",
+            100.0 * cached.meta.relative_stderr,
+            o.scene
+        );
+    }
     let surface = read_reference_image(&cached.caustic(), scene)?;
     let volume = match cached.volume().filter(|_| volume) {
         Some(p) => Some(read_reference_image(&p, scene)?),
