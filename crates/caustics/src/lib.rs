@@ -6,10 +6,11 @@
 //! ([`reproduce`], [`summary`], [`plots`], the declared [`figures`]) and the regression gate `caustics compare`
 //! ([`compare`]) and the static HTML report ([`report`]) build on `run`.
 
-/// `println!` and `print!` that never panic when stdout is closed early (`caustics list
-/// | head -1`): std's panic on a broken pipe. What cannot be written to a closed pipe is
-/// dropped; any other write error is reported on stderr.
-macro_rules! println {
+/// `println!` that never panics when stdout is closed early (`caustics list | head -1`:
+/// std's `println!` panics on a broken pipe). What a closed pipe cannot take is dropped;
+/// any other write error is reported on stderr. Used for every line the binary prints.
+#[macro_export]
+macro_rules! outln {
     ($($t:tt)*) => {{
         use std::io::Write as _;
         if let Err(e) = writeln!(std::io::stdout(), $($t)*) {
@@ -20,9 +21,9 @@ macro_rules! println {
     }};
 }
 
-/// See [`println!`].
-#[allow(unused_macros)]
-macro_rules! print {
+/// [`outln!`] without the newline.
+#[macro_export]
+macro_rules! out {
     ($($t:tt)*) => {{
         use std::io::Write as _;
         if let Err(e) = write!(std::io::stdout(), $($t)*) {

@@ -1,64 +1,41 @@
 //! `caustics`: render caustic scenes with real-time methods, measure and score them.
 
-/// `println!` and `print!` that never panic when stdout is closed early (`caustics list
-/// | head -1`): std's panic on a broken pipe. What cannot be written to a closed pipe is
-/// dropped; any other write error is reported on stderr.
-macro_rules! println {
-    ($($t:tt)*) => {{
-        use std::io::Write as _;
-        if let Err(e) = writeln!(std::io::stdout(), $($t)*) {
-            if e.kind() != std::io::ErrorKind::BrokenPipe {
-                eprintln!("error: writing to stdout: {e}");
-            }
-        }
-    }};
-}
-
-/// See [`println!`].
-#[allow(unused_macros)]
-macro_rules! print {
-    ($($t:tt)*) => {{
-        use std::io::Write as _;
-        if let Err(e) = write!(std::io::stdout(), $($t)*) {
-            if e.kind() != std::io::ErrorKind::BrokenPipe {
-                eprintln!("error: writing to stdout: {e}");
-            }
-        }
-    }};
-}
-
 use std::process::ExitCode;
 
 use anyhow::Result;
 use caustics::cli::{Cli, Command};
 use caustics::run::{EXIT_SKIPPED, RunOutcome};
-use caustics::{registry, run};
+use caustics::{out, outln, registry, run};
 use clap::Parser;
 
 fn list() {
-    println!("scenes ({}):", caustics_scene::builtin_dir().display());
+    outln!("scenes ({}):", caustics_scene::builtin_dir().display());
     for name in caustics_scene::builtin_names() {
         let desc = caustics_scene::resolve(&name)
             .ok()
             .and_then(|p| caustics_scene::Scene::load(&p).ok())
             .map(|s| s.description)
             .unwrap_or_else(|| "(does not load: run `caustics run` on it for the error)".into());
-        println!("  {name:<20} {desc}");
+        outln!("  {name:<20} {desc}");
     }
-    println!("\nmethods:");
+    outln!("\nmethods:");
     for m in registry::methods() {
-        println!("  {:<20} {}", m.name, m.summary);
-        println!("  {:<20} source: {}", "", m.source);
-        println!("  {:<20} supports: {}", "", m.capabilities.describe());
+        outln!("  {:<20} {}", m.name, m.summary);
+        outln!("  {:<20} source: {}", "", m.source);
+        outln!("  {:<20} supports: {}", "", m.capabilities.describe());
         for p in (m.params)() {
             let range = p.range.map(|r| format!(" in {r}")).unwrap_or_default();
-            println!(
+            outln!(
                 "  {:<20}   --param {}={}  {} ({}{range})",
-                "", p.name, p.default, p.doc, p.kind
+                "",
+                p.name,
+                p.default,
+                p.doc,
+                p.kind
             );
         }
         for c in m.counters {
-            println!("  {:<20}   counter {}: {}", "", c.name, c.doc);
+            outln!("  {:<20}   counter {}: {}", "", c.name, c.doc);
         }
     }
 }
@@ -113,27 +90,27 @@ fn main() -> ExitCode {
             }
         }),
         Command::Merge(args) => caustics::reproduce::merge(&args).map(|dir| {
-            println!("merged into {}", dir.display());
+            outln!("merged into {}", dir.display());
             ExitCode::SUCCESS
         }),
         Command::Compare(args) => caustics::compare::compare(&args).and_then(|r| {
             if args.wide {
-                print!("{}", r.wide_table(args.verbose));
+                out!("{}", r.wide_table(args.verbose));
             } else {
-                print!("{}", r.table(args.verbose));
+                out!("{}", r.table(args.verbose));
             }
             if let Some(page) = &args.html {
                 caustics::compare::write_html(page, &args, &r)?;
-                println!("comparison page: {}", page.display());
+                outln!("comparison page: {}", page.display());
             }
             Ok(ExitCode::from(r.exit_code()))
         }),
         Command::Schema { kind } => {
-            print!("{}", caustics::schemas::schema_text(kind));
+            out!("{}", caustics::schemas::schema_text(kind));
             Ok(ExitCode::SUCCESS)
         }
         Command::Report(args) => caustics::report::report(&args).map(|index| {
-            println!("report: {}", index.display());
+            outln!("report: {}", index.display());
             ExitCode::SUCCESS
         }),
         Command::Run(opts) => run::run(&opts).map(|o| match o {
@@ -160,35 +137,46 @@ fn main() -> ExitCode {
 }
 
 fn print_summary(dir: &std::path::Path, r: &caustics::result::RunResult) {
-    println!(
+    outln!(
         "{} / {} on {} ({})",
-        r.scene.name, r.method.name, r.machine.adapter, r.build.profile
+        r.scene.name,
+        r.method.name,
+        r.machine.adapter,
+        r.build.profile
     );
     for p in &r.timing.passes {
         match &p.gpu_ms {
-            Some(s) => println!(
+            Some(s) => outln!(
                 "  {:<32} {:>9.3} ms  (p10 {:.3}, p90 {:.3})",
-                p.name, s.median, s.p10, s.p90
+                p.name,
+                s.median,
+                s.p10,
+                s.p90
             ),
-            None => println!("  {:<32} {:>9} (no timestamps)", p.name, "-"),
+            None => outln!("  {:<32} {:>9} (no timestamps)", p.name, "-"),
         }
     }
     if let Some(s) = &r.timing.method_gpu_ms {
-        println!("  {:<32} {:>9.3} ms", "method total", s.median);
+        outln!("  {:<32} {:>9.3} ms", "method total", s.median);
     }
     if let Some(f) = &r.fragments {
-        println!(
+        outln!(
             "  fragments: method {} (fill-counted {}, max {}/px)",
-            f.method_total, f.fill_total, f.fill_max
+            f.method_total,
+            f.fill_total,
+            f.fill_max
         );
     }
     for (k, v) in &r.counters {
-        println!("  {k}: {v}");
+        outln!("  {k}: {v}");
     }
     if let Some(s) = &r.scoring {
-        println!(
+        outln!(
             "  scoring frame: {}x{} sub-pixel offsets ({} spp), {:.0} ms wall, not timed",
-            s.grid, s.grid, s.samples_per_pixel, s.wall_ms
+            s.grid,
+            s.grid,
+            s.samples_per_pixel,
+            s.wall_ms
         );
     }
     let opt = |v: Option<f64>, digits: usize| match v {
@@ -200,7 +188,7 @@ fn print_summary(dir: &std::path::Path, r: &caustics::result::RunResult) {
         let images = std::iter::once(("surface", &report.surface))
             .chain(report.volume.as_ref().map(|v| ("volume", v)));
         for (image, e) in images {
-            println!(
+            outln!(
                 "  {image} errors{label}: flux ratio {} (image {}), relMSE {:.4e} (after flux {}), HDR-FLIP {}, LDR-FLIP {:.4}, RMSE {:.4e}",
                 opt(e.flux_ratio, 3),
                 opt(e.flux_ratio_image, 3),
@@ -212,5 +200,5 @@ fn print_summary(dir: &std::path::Path, r: &caustics::result::RunResult) {
             );
         }
     }
-    println!("  written to {}", dir.display());
+    outln!("  written to {}", dir.display());
 }

@@ -141,7 +141,7 @@ pub fn reference(args: &ReferenceArgs) -> Result<()> {
     bar.finish_and_clear();
     write(&dir, &scene, args.seed, args.batches, &result)?;
     let rel = relative_stderr(&result.caustic, &result.caustic_stderr);
-    println!(
+    crate::outln!(
         "{}: {} photons in {:.1} s ({:.2} M photons/s), mean relative standard error {:.2}% -> {}",
         scene.name,
         result.photons,
@@ -223,9 +223,12 @@ fn write(
 /// Photons/s of the reference on the scenes the issue names.
 fn bench(args: &ReferenceArgs) -> Result<()> {
     let photons = args.photons.unwrap_or(4_000_000);
-    println!(
+    crate::outln!(
         "{:<20} {:>12} {:>10} {:>14}",
-        "scene", "photons", "seconds", "M photons/s"
+        "scene",
+        "photons",
+        "seconds",
+        "M photons/s"
     );
     for name in ["sphere_on_plane", "ring", "water_pool"] {
         let scene = Scene::load(&caustics_scene::resolve(name)?)?;
@@ -233,7 +236,7 @@ fn bench(args: &ReferenceArgs) -> Result<()> {
         let start = Instant::now();
         let r = tracer.render(&options(args, photons), &|_| {})?;
         let s = start.elapsed().as_secs_f64();
-        println!(
+        crate::outln!(
             "{name:<20} {:>12} {s:>10.2} {:>14.3}",
             r.photons,
             r.photons as f64 / s / 1e6
