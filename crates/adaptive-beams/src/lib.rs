@@ -9,8 +9,9 @@
 //! rasterized from the camera to add volume and surface caustics. The pipeline lives
 //! in the `beams` crate, shared with `static-grid`; this crate holds the method's
 //! parameters and defaults (the paper's: 16² base grid, 3 levels, tight hulls; the
-//! paper gives no thresholds for its oracle, so they are set where the built-ins at its
-//! 1024×768 use the 492–5,300 beams of its Table 1).
+//! paper gives no thresholds for its oracle, so it asks for every split that misplaces
+//! a pixel of light, and a beam budget of Table 1's largest count, 5,300, takes the
+//! splits of highest priority, coarse levels first).
 
 use beams::{BeamConfig, BeamMethod, BeamParams, CAPABILITIES, HullKind, Refinement};
 use caustics_gpu::{GpuContext, Renderer};
@@ -87,6 +88,17 @@ mod tests {
     }
 
     #[test]
+    fn a_budget_past_the_beam_buffers_is_refused_by_name() {
+        let mut p = AdaptiveBeamsParams::default();
+        p.refinement.beam_budget = p.beams.max_beams + 1;
+        let e = p
+            .config()
+            .check()
+            .expect_err("the budget must fit max_beams");
+        assert!(e.contains("beam_budget") && e.contains("max_beams"), "{e}");
+    }
+
+    #[test]
     fn bad_params_name_the_parameter() {
         for (json, needle) in [
             (serde_json::json!({"levels": 5}), "levels"),
@@ -111,6 +123,8 @@ mod tests {
             (serde_json::json!({"max_focus": 0.0}), "max_focus"),
             (serde_json::json!({"split_hit_rel": 1.5}), "split_hit_rel"),
             (serde_json::json!({"split_hit_rel": -0.1}), "split_hit_rel"),
+            (serde_json::json!({"beam_budget": -1}), "beam_budget"),
+            (serde_json::json!({"beam_budget": 1e9}), "beam_budget"),
             (
                 serde_json::json!({"split_normal_deg": "30"}),
                 "split_normal_deg",

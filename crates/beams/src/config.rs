@@ -79,8 +79,9 @@ method_params! {
     /// Refinement of the projected grid by the split oracle (Sect. 4.2): the parameters
     /// of `adaptive-beams` beyond [`BeamParams`]. The levels are the paper's (Sect. 8:
     /// three steps on a 16² grid); its oracle is "an empirically set-up heuristic" with
-    /// no numbers given, so the thresholds are set where the built-ins at the paper's
-    /// 1024×768 use Table 1's 492–5,300 beams (`bench/experiments/liktor-table1.json`).
+    /// no numbers given, so the thresholds ask for every split that misplaces a pixel
+    /// of light and the beam budget, Table 1's largest count (5,300 at 1024×768), picks
+    /// among them by priority (`bench/experiments/liktor-table1.json`).
     pub struct Refinement {
         /// refinement levels of the projected grid (bound: the counters of levels 0..=4)
         levels: u32 = 3 => closed(0.0, MAX_LEVELS as f64);
@@ -92,16 +93,18 @@ method_params! {
         split_depth_slope: f64 = 4.0 => above(0.0, 1e3);
         /// edge-midpoint photon hits off the linear prediction by more than this (camera px) split (Sect. 6; bound: an image side)
         split_hit_px: f64 = 1.0 => above(0.0, 16384.0);
-        /// edge-midpoint photon hits split only when also off by more than this fraction of the edge's landing length (a beam spreads its flux evenly, while the true irradiance varies across it by about 8x this fraction); 0 = the pixel bound alone (tuned at 1024x768 with split_camera_px for the paper's beam counts; bound: the whole edge)
-        split_hit_rel: f64 = 0.3 => closed(0.0, 1.0);
+        /// edge-midpoint photon hits split only when also off by more than this fraction of the edge's landing length (a beam spreads its flux evenly, while the true irradiance varies across it by about 8x this fraction); 0 = the pixel bound alone (the default: the beam budget keeps the count; bound: the whole edge)
+        split_hit_rel: f64 = 0.0 => closed(0.0, 1.0);
         /// split beams that carry much light or focus it (Sect. 4.2)
         split_energy: bool = true;
         /// split while the beam's flux relative to an unrefined beam's (path throughput x 4^-level) times A(0)/A(where seen) exceeds this (the receiver; the narrowest point in a medium; bound: relative flux <= 1 times the largest max_focus)
         split_energy_threshold: f64 = 2.0 => above(0.0, 1e6);
         /// split beams that look large from the camera (Sect. 4.2)
         split_camera: bool = true;
-        /// split while the beam base spans more than this many pixels where its central ray passes closest to the eye (a quarter of a 1024-pixel image; bound: an image side)
-        split_camera_px: f64 = 256.0 => above(0.0, 16384.0);
+        /// split while the beam base spans more than this many pixels where its central ray passes closest to the eye (bound: an image side)
+        split_camera_px: f64 = 16.0 => above(0.0, 16384.0);
+        /// beams to aim for, all families (Table 1's largest count at 1024x768): each level, coarse first, takes the splits the oracle asks for by priority (pixels of misplaced light; a triangle whose light would be dropped first) while they fit the beams left, four children per beam at stake (the paper's "convergent beams ... are refined with higher priority", Sect. 4.2); a target, not a bound (children may emit more than estimated); 0 = every split asked (bound: max_beams)
+        beam_budget: u32 = 5300 => closed(0.0, 4194304.0);
     }
 }
 
@@ -113,6 +116,7 @@ impl Refinement {
             split_discontinuity: false,
             split_energy: false,
             split_camera: false,
+            beam_budget: 0,
             ..Self::default()
         }
     }
@@ -141,7 +145,14 @@ impl BeamConfig {
     pub fn check(&self) -> Result<(), String> {
         use caustics_method::MethodParams;
         self.beams.check()?;
-        self.refinement.check()
+        self.refinement.check()?;
+        if self.refinement.beam_budget > self.beams.max_beams {
+            return Err(format!(
+                "beam_budget: {} beams do not fit the beam buffers (max_beams {}); raise max_beams or lower the budget",
+                self.refinement.beam_budget, self.beams.max_beams
+            ));
+        }
+        Ok(())
     }
 }
 

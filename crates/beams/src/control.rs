@@ -7,8 +7,13 @@ use caustics_method::{CounterDoc, Counters};
 
 use crate::{MAX_BOUNCES, MAX_LEVELS};
 
-/// Words of the control buffer (reset to zero every frame).
-pub(crate) const CONTROL_WORDS: usize = 48;
+/// Bins of the split-priority histogram of a level (`beam_budget`): priorities
+/// 2^-8..2^24 in steps of 2^(1/32) (generate.wgsl `priority_bin`).
+pub(crate) const SPLIT_BINS: usize = 1024;
+
+/// Words of the control buffer (reset to zero every frame): the named words, then
+/// the split-priority histogram.
+pub(crate) const CONTROL_WORDS: usize = SPLIT_HISTOGRAM.index + SPLIT_BINS;
 
 /// Light-path families of a leaf (path.wgsl `FAMILY_*`): the main path, the Fresnel
 /// reflection at the first interface, one per internal reflection count 1..=MAX_BOUNCES.
@@ -25,6 +30,8 @@ pub(crate) enum Span {
     /// One word per light-path family, reported as `<counter>_main`,
     /// `<counter>_fresnel_reflection` and `<counter>_internal_<j>` for j = 1..=bounces.
     Families,
+    /// [`SPLIT_BINS`] words, one per split-priority bin (state, not reported).
+    Bins,
 }
 
 /// One word, or one word per refinement level, of the control buffer.
@@ -66,7 +73,18 @@ pub(crate) const LEVEL: Word = counter("C_LEVEL", 8, "levels_run", "refinement l
 /// Beams written so far.
 pub(crate) const BEAM_TOTAL: Word = counter("C_BEAM_TOTAL", 12, "beams", "beams after this level");
 
-/// Every word, by index (words 0 to 7, 29 to 31 and from 44 on are unused).
+/// The split-priority histogram of the current level (`beam_budget`): per bin, the
+/// leaves at stake in the splits asked with that priority.
+const SPLIT_HISTOGRAM: Word = Word {
+    span: Span::Bins,
+    ..state(
+        "C_SPLIT_HISTOGRAM",
+        64,
+        "split-priority histogram of the level (beam_budget)",
+    )
+};
+
+/// Every word, by index (words 0 to 7 and 44 to 63 are unused).
 #[rustfmt::skip]
 pub(crate) const CONTROL: &[Word] = &[
     LEVEL,
@@ -86,9 +104,13 @@ pub(crate) const CONTROL: &[Word] = &[
     counter("C_SPLIT_CAMERA", 26, "splits_camera", "splits asked by the camera criterion"),
     counter("C_CANDIDATES_TOTAL", 27, "candidates", "grid triangles considered over all levels"),
     counter("C_DROPPED_NO_RECEIVER", 28, "dropped_no_receiver", "beam families that meet no receiver (without a medium)"),
+    state("C_LEAF_COST", 29, "beams the level's candidates emit if none splits (beam_budget)"),
+    state("C_SPLIT_MIN_BIN", 30, "lowest priority bin that splits at this level (beam_budget)"),
+    counter("C_SPLITS_DEFERRED", 31, "splits_deferred", "splits asked for that the beam budget left undone"),
     Word { span: Span::Families, ..counter("C_BEAMS_PER_FAMILY", 32, "beams_path", "beams emitted of each light-path family") },
     counter("C_BEAMS_REHIT", 42, "beams_path_rehit", "beams whose path meets a generator again (bounces)"),
     counter("C_BEAMS_TIR", 43, "beams_path_tir", "beams whose path is totally internally reflected on the way (bounces)"),
+    SPLIT_HISTOGRAM,
 ];
 
 /// What each counter of both beam methods counts (`static-grid` and `adaptive-beams`
@@ -117,6 +139,7 @@ pub const COUNTER_DOCS: &[CounterDoc] = &[
     CounterDoc { name: "overflow_candidates", doc: "children of splits that found no room in the next level's candidate list (max_beams) and were not refined further: light missing from the image; 0 in a good run" },
     CounterDoc { name: "splits_camera", doc: "triangles split by the camera criterion: the beam's base spans more than split_camera_px pixels where its central ray passes closest to the eye (0 in static-grid, which never splits; a triangle split for several reasons counts in each splits_*)" },
     CounterDoc { name: "splits_discontinuity", doc: "triangles split by the discontinuity criterion: corners partly missing the generators, on different paths, with normals or depths that differ too much, or an edge midpoint whose light lands off the linear prediction (0 in static-grid)" },
+    CounterDoc { name: "splits_deferred", doc: "splits the oracle asked for that the beam budget left undone: the triangle stayed a leaf because splits of higher priority used the budget (0 without beam_budget; counted also in splits_*)" },
     CounterDoc { name: "splits_energy", doc: "triangles split by the energy criterion: the beam's flux relative to an unrefined beam's times how much it focuses where it is seen exceeds split_energy_threshold (0 in static-grid)" },
 ];
 
@@ -126,6 +149,7 @@ impl Word {
             Span::One => 1,
             Span::Levels => MAX_LEVELS as usize + 1,
             Span::Families => FAMILIES,
+            Span::Bins => SPLIT_BINS,
         }
     }
 }
@@ -149,6 +173,7 @@ pub(crate) fn wgsl() -> String {
             Span::One => String::new(),
             Span::Levels => format!(" ({} words, levels 0..{MAX_LEVELS})", w.words()),
             Span::Families => format!(" ({} words, families 0..{})", w.words(), FAMILIES - 1),
+            Span::Bins => format!(" ({} words)", w.words()),
         };
         out.push_str(&format!(
             "const {}: u32 = {}u; // {}{span}\n",
@@ -178,6 +203,7 @@ pub(crate) fn counters(c: &[u32], levels: u32, bounces: u32) -> Counters {
                     out.insert(family_name(name, f), u64::from(c[w.index + f]));
                 }
             }
+            Span::Bins => {}
         }
     }
     out

@@ -2,8 +2,9 @@
 // by level by the split oracle (Sect. 4.2), then each leaf triangle becomes one beam
 // per light-path family with its beam space, area function and hull (Sect. 4.3).
 // The paper refines in a geometry shader with stream-out; here each level is four
-// compute dispatches (decide, scan, emit, advance) with a deterministic prefix sum
-// instead of stream-out order, so the same beams land in the same slots every frame.
+// compute dispatches (decide, scan, emit, advance; with a beam budget, `budget`
+// between decide and scan) with a deterministic prefix sum instead of stream-out
+// order, so the same beams land in the same slots every frame.
 
 @group(1) @binding(6) var<storage, read_write> candidates_a: array<Candidate>;
 @group(1) @binding(7) var<storage, read_write> candidates_b: array<Candidate>;
@@ -21,11 +22,31 @@
 // which prepends their constants to this file.
 
 // An action word is ACTION_SPLIT or the mask of the families a leaf emits (bit f:
-// family f, up to FAMILY_INTERNAL + MAX_BOUNCES - 1).
+// family f, up to FAMILY_INTERNAL + MAX_BOUNCES - 1). With a beam budget a split the
+// oracle asks for is ACTION_WANT, with the leaf it would be (mask, families that meet
+// no receiver, why it emits nothing) and its priority bin; `resolve` turns it into a
+// split or that leaf once the level's threshold bin is known.
 const ACTION_SPLIT: u32 = 0x80000000u;
+const ACTION_WANT: u32 = 0x40000000u;
+const ACTION_MASK: u32 = 0x3FFu;
+const ACTION_NO_RECEIVER_SHIFT: u32 = 10u;
+const ACTION_DROP_SHIFT: u32 = 14u;
+const ACTION_BIN_SHIFT: u32 = 16u;
+const DROP_INVALID: u32 = 1u;
+const DROP_DISCONTINUITY: u32 = 2u;
 const SPLIT_DISCONTINUITY: u32 = 1u;
 const SPLIT_ENERGY: u32 = 2u;
 const SPLIT_CAMERA: u32 = 4u;
+// Split priorities are binned on a log scale: bin = 32·log2(p) + 256, p in 2^-8..2^24
+// (control.rs SPLIT_BINS).
+const SPLIT_BINS: u32 = 1024u;
+const BINS_PER_OCTAVE: u32 = 32u;
+const BIN_OF_ONE: f32 = 256.0;
+// Camera size (px) given to the base grid's triangles, before the oracle measured one.
+const UNMEASURED_SIZE_PX: f32 = 1e6;
+// A triangle whose main path would be dropped as a leaf (its corners part ways) loses
+// all its light, not a share of it: its priority is its size times this.
+const DROPPED_LIGHT_WEIGHT: f32 = 4.0;
 
 fn level_parity() -> u32 {
     return atomicLoad(&control[C_LEVEL]) & 1u;
@@ -76,12 +97,13 @@ fn init_grid(@builtin(global_invocation_id) id: vec3<u32>) {
     let c = vec2<f32>(x, y + 1.0) * s;
     let d = vec2<f32>(x + 1.0, y + 1.0) * s;
     var t: Candidate;
+    let size = select(0.0, UNMEASURED_SIZE_PX, u.beam_budget > 0u);
     if (id.x & 1u) == 0u {
         t.uv01 = vec4<f32>(a, b);
-        t.uv2_level = vec4<f32>(c, 0.0, 0.0);
+        t.uv2_level = vec4<f32>(c, 0.0, size);
     } else {
         t.uv01 = vec4<f32>(b, d);
-        t.uv2_level = vec4<f32>(c, 0.0, 0.0);
+        t.uv2_level = vec4<f32>(c, 0.0, size);
     }
     candidates_a[id.x] = t;
 }
@@ -143,14 +165,20 @@ fn lands(k: Corners) -> bool {
 // Families a leaf emits: bit 0 the main path, bit 1 the Fresnel reflection, bit
 // FAMILY_INTERNAL + j - 1 the light reflected j times inside the first object
 // (`bounces`; Sect. 6 makes the reflected beam on the same refined grid, and so are
-// these: the split oracle looks at the main path only).
-fn leaf_mask(c: Candidate, main: Corners) -> u32 {
-    var mask = 0u;
+// these: the split oracle looks at the main path only), and how many consistent
+// families meet no receiver (the caller counts them where the triangle is a leaf).
+struct Leaf {
+    mask: u32,
+    no_receiver: u32,
+}
+
+fn leaf_mask(c: Candidate, main: Corners) -> Leaf {
+    var leaf = Leaf(0u, 0u);
     if consistent(main) && corners_geometry(main).ok {
         if lands(main) {
-            mask |= 1u;
+            leaf.mask |= 1u;
         } else {
-            atomicAdd(&control[C_DROPPED_NO_RECEIVER], 1u);
+            leaf.no_receiver += 1u;
         }
     }
     let first = u.specular[specular_slot_of(main.p[0].first_object)];
@@ -160,9 +188,9 @@ fn leaf_mask(c: Candidate, main: Corners) -> u32 {
         let refl = trace_corners(c, FAMILY_REFLECTED);
         if consistent(refl) && corners_geometry(refl).ok {
             if lands(refl) {
-                mask |= 2u;
+                leaf.mask |= 2u;
             } else {
-                atomicAdd(&control[C_DROPPED_NO_RECEIVER], 1u);
+                leaf.no_receiver += 1u;
             }
         }
     }
@@ -174,47 +202,127 @@ fn leaf_mask(c: Candidate, main: Corners) -> u32 {
             let inner = trace_corners(c, family);
             if consistent(inner) && corners_geometry(inner).ok {
                 if lands(inner) {
-                    mask |= 1u << family;
+                    leaf.mask |= 1u << family;
                 } else {
-                    atomicAdd(&control[C_DROPPED_NO_RECEIVER], 1u);
+                    leaf.no_receiver += 1u;
                 }
             }
         }
     }
-    return mask;
+    return leaf;
 }
 
-// The split oracle (Sect. 4.2). Returns which criteria ask for a split.
-fn split_reasons(c: Candidate, k: Corners, level: u32) -> u32 {
-    var reasons = 0u;
+// Why a leaf that emits nothing does so (0: it emits a beam, or it is neither).
+fn drop_reason(k: Corners, mask: u32) -> u32 {
+    if mask != 0u {
+        return 0u;
+    }
+    let valid = u32(k.p[0].valid) + u32(k.p[1].valid) + u32(k.p[2].valid);
+    if valid == 0u {
+        return DROP_INVALID;
+    }
+    if !consistent(k) {
+        return DROP_DISCONTINUITY;
+    }
+    return 0u;
+}
+
+fn count_drop(reason: u32, no_receiver: u32) {
+    if no_receiver > 0u {
+        atomicAdd(&control[C_DROPPED_NO_RECEIVER], no_receiver);
+    }
+    if reason == DROP_INVALID {
+        atomicAdd(&control[C_DROPPED_INVALID], 1u);
+    } else if reason == DROP_DISCONTINUITY {
+        atomicAdd(&control[C_DROPPED_DISCONTINUITY], 1u);
+    }
+}
+
+// How large the triangle's light looks from the camera (px), the priority scale of a
+// discontinuity: the spread of its valid corners' landings (their points on the
+// generator where fewer than two land), or half its parent's where fewer than two
+// corners are valid.
+fn size_px(c: Candidate, k: Corners) -> f32 {
+    var pts: array<vec3<f32>, 3>;
+    var n = 0u;
+    for (var i = 0u; i < 3u; i++) {
+        if k.p[i].valid && k.p[i].end_object != NONE {
+            pts[n] = k.p[i].origin + k.p[i].dir * k.p[i].t_end;
+            n += 1u;
+        }
+    }
+    if n < 2u {
+        n = 0u;
+        for (var i = 0u; i < 3u; i++) {
+            if k.p[i].valid {
+                pts[n] = k.p[i].first_point;
+                n += 1u;
+            }
+        }
+    }
+    if n < 2u {
+        return 0.5 * c.uv2_level.w;
+    }
+    var center = vec3<f32>(0.0);
+    var spread = 0.0;
+    for (var i = 0u; i < n; i++) {
+        center += pts[i];
+        for (var j = i + 1u; j < n; j++) {
+            spread = max(spread, distance(pts[i], pts[j]));
+        }
+    }
+    center /= f32(n);
+    return spread / (max(distance(center, frame.eye.xyz), 1e-6) * u.pixel_angle);
+}
+
+// The split oracle (Sect. 4.2): which criteria ask for a split and, with a beam
+// budget, how urgently (in pixels of misplaced light over split_hit_px for the
+// discontinuity criterion; how far over their thresholds for energy and camera).
+struct Split {
+    reasons: u32,
+    priority: f32,
+    size_px: f32,
+}
+
+fn split_oracle(c: Candidate, k: Corners, level: u32) -> Split {
+    var s = Split(0u, 0.0, 0.0);
+    let ranked = u.beam_budget > 0u;
+    if ranked {
+        s.size_px = size_px(c, k);
+    }
     let valid = u32(k.p[0].valid) + u32(k.p[1].valid) + u32(k.p[2].valid);
     // Discontinuities of the specular surfaces: a silhouette (some corners miss),
-    // different objects on the way, normals or depths that differ strongly.
+    // different objects on the way, normals or depths that differ strongly. Their
+    // priority is the size of the light they cut (a beam across one loses or
+    // misplaces light over all of it).
     if (u.split_flags & SPLIT_DISCONTINUITY) != 0u {
         if valid > 0u && valid < 3u {
             // Only the corners can tell: a corner that misses while another hits is a
             // silhouette; split so the leaves follow it.
-            reasons |= SPLIT_DISCONTINUITY;
+            s.reasons |= SPLIT_DISCONTINUITY;
         } else if valid == 3u {
             if !consistent(k) {
-                reasons |= SPLIT_DISCONTINUITY;
+                s.reasons |= SPLIT_DISCONTINUITY;
             }
             for (var i = 0u; i < 3u; i++) {
                 let j = (i + 1u) % 3u;
                 if dot(k.p[i].first_normal, k.p[j].first_normal) < u.split_cos_normal {
-                    reasons |= SPLIT_DISCONTINUITY;
+                    s.reasons |= SPLIT_DISCONTINUITY;
                 }
                 let delta = k.p[i].first_point - k.p[j].first_point;
                 let along = dot(delta, k.p[i].light_dir);
                 let lateral = length(delta - along * k.p[i].light_dir);
                 if abs(k.p[i].first_depth - k.p[j].first_depth) > u.split_depth_slope * max(lateral, 1e-9) {
-                    reasons |= SPLIT_DISCONTINUITY;
+                    s.reasons |= SPLIT_DISCONTINUITY;
                 }
             }
         }
+        if s.reasons != 0u {
+            s.priority = s.size_px / u.split_hit_px;
+        }
     }
     if valid < 3u {
-        return reasons;
+        return s;
     }
     // Photon-hit differences (Sect. 6): where the light of an edge midpoint lands
     // against the beam's linear prediction (the mean of the corners' landings). A beam
@@ -223,14 +331,18 @@ fn split_reasons(c: Candidate, k: Corners, level: u32) -> u32 {
     // asks for δ beyond split_hit_px camera pixels (where the light lands) and beyond
     // split_hit_rel·L (what a relative error sees). Large beams that bend gently keep
     // their level; small ones that focus, where δ/L grows, are split (the paper's
-    // "convergent beams ... are refined with higher priority", Sect. 4.2).
-    if (u.split_flags & SPLIT_DISCONTINUITY) != 0u && reasons == 0u {
+    // "convergent beams ... are refined with higher priority", Sect. 4.2). Ranked, the
+    // priority is the largest δ in pixels over split_hit_px: a beam's squared error
+    // summed over its pixels goes as (δ/L)²·(L in px)² = (δ in px)².
+    if (u.split_flags & SPLIT_DISCONTINUITY) != 0u && s.reasons == 0u {
         let uv = array<vec2<f32>, 3>(c.uv01.xy, c.uv01.zw, c.uv2_level.xy);
+        var deviation_px = 0.0;
         for (var i = 0u; i < 3u; i++) {
             let j = (i + 1u) % 3u;
             let m = trace_path(0.5 * (uv[i] + uv[j]), FAMILY_MAIN);
             if !m.valid || m.signature != k.p[i].signature || m.end_object != k.p[i].end_object {
-                reasons |= SPLIT_DISCONTINUITY;
+                s.reasons |= SPLIT_DISCONTINUITY;
+                s.priority = s.size_px / u.split_hit_px;
                 break;
             }
             let land_i = k.p[i].origin + k.p[i].dir * k.p[i].t_end;
@@ -239,10 +351,16 @@ fn split_reasons(c: Candidate, k: Corners, level: u32) -> u32 {
             let deviation = distance(land_m, 0.5 * (land_i + land_j));
             let dist = max(distance(land_m, frame.eye.xyz), 1e-6);
             let edge = distance(land_i, land_j);
+            deviation_px = max(deviation_px, deviation / (dist * u.pixel_angle));
             if deviation > max(u.split_hit_px * dist * u.pixel_angle, u.split_hit_rel * edge) {
-                reasons |= SPLIT_DISCONTINUITY;
-                break;
+                s.reasons |= SPLIT_DISCONTINUITY;
+                if !ranked {
+                    break;
+                }
             }
+        }
+        if s.reasons != 0u {
+            s.priority = max(s.priority, deviation_px / u.split_hit_px);
         }
     }
     let g = corners_geometry(k);
@@ -264,7 +382,8 @@ fn split_reasons(c: Candidate, k: Corners, level: u32) -> u32 {
         let relative_flux = luminance(mean_w) / max(luminance(u.light_power.xyz), 1e-20)
             * exp2(-2.0 * f32(level));
         if relative_flux * focus > u.split_energy {
-            reasons |= SPLIT_ENERGY;
+            s.reasons |= SPLIT_ENERGY;
+            s.priority = max(s.priority, relative_flux * focus / u.split_energy);
         }
     }
     // Camera: the projected size of the beam, measured at the point of its central
@@ -274,15 +393,29 @@ fn split_reasons(c: Candidate, k: Corners, level: u32) -> u32 {
         let dir = normalize(k.p[0].dir + k.p[1].dir + k.p[2].dir);
         let t_end = (k.p[0].t_end + k.p[1].t_end + k.p[2].t_end) / 3.0;
         let eye = frame.eye.xyz;
-        let s = clamp(dot(eye - center, dir), 0.0, t_end);
-        let dist = max(distance(center + s * dir, eye), 1e-6);
+        let t = clamp(dot(eye - center, dir), 0.0, t_end);
+        let dist = max(distance(center + t * dir, eye), 1e-6);
         let size = max(max(distance(k.p[0].origin, k.p[1].origin), distance(k.p[1].origin, k.p[2].origin)),
                        distance(k.p[2].origin, k.p[0].origin));
         if size / (dist * u.pixel_angle) > u.split_camera_px {
-            reasons |= SPLIT_CAMERA;
+            s.reasons |= SPLIT_CAMERA;
+            s.priority = max(s.priority, size / (dist * u.pixel_angle) / u.split_camera_px);
         }
     }
-    return reasons;
+    return s;
+}
+
+fn priority_bin(priority: f32) -> u32 {
+    let bin = floor(log2(max(priority, 1e-30)) * f32(BINS_PER_OCTAVE) + BIN_OF_ONE);
+    return u32(clamp(bin, 0.0, f32(SPLIT_BINS - 1u)));
+}
+
+fn store_size(i: u32, size: f32) {
+    if level_parity() == 0u {
+        candidates_a[i].uv2_level.w = size;
+    } else {
+        candidates_b[i].uv2_level.w = size;
+    }
 }
 
 @compute @workgroup_size(64)
@@ -293,26 +426,84 @@ fn decide(@builtin(global_invocation_id) id: vec3<u32>) {
     let c = load_candidate(id.x);
     let level = u32(c.uv2_level.z);
     let k = trace_corners(c, FAMILY_MAIN);
+    let ranked = u.beam_budget > 0u;
     if level < u.levels {
-        let reasons = split_reasons(c, k, level);
-        if reasons != 0u {
-            if (reasons & SPLIT_DISCONTINUITY) != 0u { atomicAdd(&control[C_SPLIT_DISCONTINUITY], 1u); }
-            if (reasons & SPLIT_ENERGY) != 0u { atomicAdd(&control[C_SPLIT_ENERGY], 1u); }
-            if (reasons & SPLIT_CAMERA) != 0u { atomicAdd(&control[C_SPLIT_CAMERA], 1u); }
-            actions[id.x] = ACTION_SPLIT;
+        let s = split_oracle(c, k, level);
+        if s.reasons != 0u {
+            if (s.reasons & SPLIT_DISCONTINUITY) != 0u { atomicAdd(&control[C_SPLIT_DISCONTINUITY], 1u); }
+            if (s.reasons & SPLIT_ENERGY) != 0u { atomicAdd(&control[C_SPLIT_ENERGY], 1u); }
+            if (s.reasons & SPLIT_CAMERA) != 0u { atomicAdd(&control[C_SPLIT_CAMERA], 1u); }
+            if !ranked {
+                actions[id.x] = ACTION_SPLIT;
+                return;
+            }
+            // Ranked: the leaf it would be, should the budget not reach it, and the
+            // beams at stake in its split (what it emits as a leaf, at least one).
+            let leaf = leaf_mask(c, k);
+            var priority = s.priority;
+            if (leaf.mask & 1u) == 0u {
+                priority = max(priority, DROPPED_LIGHT_WEIGHT * s.size_px / u.split_hit_px);
+            }
+            let bin = priority_bin(priority);
+            let beams = countOneBits(leaf.mask);
+            atomicAdd(&control[C_LEAF_COST], beams);
+            atomicAdd(&control[C_SPLIT_HISTOGRAM + bin], max(beams, 1u));
+            store_size(id.x, s.size_px);
+            actions[id.x] = ACTION_WANT | (bin << ACTION_BIN_SHIFT)
+                | (drop_reason(k, leaf.mask) << ACTION_DROP_SHIFT)
+                | (min(leaf.no_receiver, 15u) << ACTION_NO_RECEIVER_SHIFT) | leaf.mask;
             return;
         }
     }
-    let mask = leaf_mask(c, k);
-    if mask == 0u {
-        let valid = u32(k.p[0].valid) + u32(k.p[1].valid) + u32(k.p[2].valid);
-        if valid == 0u {
-            atomicAdd(&control[C_DROPPED_INVALID], 1u);
-        } else if !consistent(k) {
-            atomicAdd(&control[C_DROPPED_DISCONTINUITY], 1u);
-        }
+    let leaf = leaf_mask(c, k);
+    count_drop(drop_reason(k, leaf.mask), leaf.no_receiver);
+    if ranked {
+        atomicAdd(&control[C_LEAF_COST], countOneBits(leaf.mask));
     }
-    actions[id.x] = mask;
+    actions[id.x] = leaf.mask;
+}
+
+// With a beam budget, between decide and scan: the lowest priority bin whose splits
+// still fit the beams left after this level's leaves, a split turning each beam at
+// stake into four. Splits of lower priority stay leaves. Coarse levels come first:
+// every level takes all it can before the next is looked at, so the grid is refined
+// evenly as far as the budget goes and the last of it goes to the splits that matter
+// most (modelling how far children would split again spent the budget on a few deep
+// regions and left coarse beams elsewhere: at 1024x768 sphere_on_plane's relMSE was
+// ten times the even refinement's at the same count). The children's beams are an
+// estimate (four per beam at stake), so the budget is a target, not a bound
+// (max_beams is the bound).
+@compute @workgroup_size(1)
+fn budget() {
+    let used = atomicLoad(&control[C_BEAM_TOTAL]) + atomicLoad(&control[C_LEAF_COST]);
+    let left = max(i32(u.beam_budget) - i32(used), 0);
+    var first_bin = SPLIT_BINS;
+    var extra = 0;
+    for (var bin = SPLIT_BINS; bin > 0u; bin--) {
+        extra += 3 * i32(atomicLoad(&control[C_SPLIT_HISTOGRAM + bin - 1u]));
+        if extra > left {
+            break;
+        }
+        first_bin = bin - 1u;
+    }
+    atomicStore(&control[C_SPLIT_MIN_BIN], first_bin);
+    // The next level starts from an empty histogram.
+    for (var bin = 0u; bin < SPLIT_BINS; bin++) {
+        atomicStore(&control[C_SPLIT_HISTOGRAM + bin], 0u);
+    }
+    atomicStore(&control[C_LEAF_COST], 0u);
+}
+
+// An action as scan and emit take it: a ranked split is a split if its bin made the
+// level's threshold, else the leaf it would be.
+fn resolve(a: u32) -> u32 {
+    if (a & ACTION_WANT) == 0u {
+        return a;
+    }
+    if ((a >> ACTION_BIN_SHIFT) & (SPLIT_BINS - 1u)) >= atomicLoad(&control[C_SPLIT_MIN_BIN]) {
+        return ACTION_SPLIT;
+    }
+    return a & ACTION_MASK;
 }
 
 const SCAN_THREADS: u32 = 256u;
@@ -336,7 +527,7 @@ fn scan(@builtin(local_invocation_index) lid: u32) {
     let end = min(start + chunk, n);
     var sum = vec2<u32>(0u);
     for (var i = start; i < end; i++) {
-        sum += action_counts(actions[i]);
+        sum += action_counts(resolve(actions[i]));
     }
     scan_children[lid] = sum.x;
     scan_beams[lid] = sum.y;
@@ -355,7 +546,7 @@ fn scan(@builtin(local_invocation_index) lid: u32) {
     var running = vec2<u32>(scan_children[lid], scan_beams[lid]) - sum;
     for (var i = start; i < end; i++) {
         offsets[i] = running;
-        running += action_counts(actions[i]);
+        running += action_counts(resolve(actions[i]));
     }
     if lid == SCAN_THREADS - 1u {
         let children = scan_children[lid];
@@ -578,10 +769,16 @@ fn emit(@builtin(global_invocation_id) id: vec3<u32>) {
     if id.x >= atomicLoad(&control[C_COUNT]) {
         return;
     }
-    let a = actions[id.x];
+    let raw = actions[id.x];
+    let a = resolve(raw);
     let off = offsets[id.x];
     let c = load_candidate(id.x);
     let level = u32(c.uv2_level.z);
+    if (raw & ACTION_WANT) != 0u && a != ACTION_SPLIT {
+        // A split the budget left undone: a leaf, counted as the oracle's leaves are.
+        atomicAdd(&control[C_SPLITS_DEFERRED], 1u);
+        count_drop((raw >> ACTION_DROP_SHIFT) & 3u, (raw >> ACTION_NO_RECEIVER_SHIFT) & 15u);
+    }
     if a == ACTION_SPLIT {
         if off.x + 4u > u.max_beams {
             return;
@@ -595,11 +792,13 @@ fn emit(@builtin(global_invocation_id) id: vec3<u32>) {
         let m12 = 0.5 * (p1 + p2);
         let m20 = 0.5 * (p2 + p0);
         let l = f32(level + 1u);
+        // The children inherit the size the oracle measured (0 unranked).
+        let size = c.uv2_level.w;
         var t: Candidate;
-        t.uv01 = vec4<f32>(p0, m01); t.uv2_level = vec4<f32>(m20, l, 0.0); store_child(off.x, t);
-        t.uv01 = vec4<f32>(m01, p1); t.uv2_level = vec4<f32>(m12, l, 0.0); store_child(off.x + 1u, t);
-        t.uv01 = vec4<f32>(m20, m12); t.uv2_level = vec4<f32>(p2, l, 0.0); store_child(off.x + 2u, t);
-        t.uv01 = vec4<f32>(m01, m12); t.uv2_level = vec4<f32>(m20, l, 0.0); store_child(off.x + 3u, t);
+        t.uv01 = vec4<f32>(p0, m01); t.uv2_level = vec4<f32>(m20, l, size); store_child(off.x, t);
+        t.uv01 = vec4<f32>(m01, p1); t.uv2_level = vec4<f32>(m12, l, size); store_child(off.x + 1u, t);
+        t.uv01 = vec4<f32>(m20, m12); t.uv2_level = vec4<f32>(p2, l, size); store_child(off.x + 2u, t);
+        t.uv01 = vec4<f32>(m01, m12); t.uv2_level = vec4<f32>(m20, l, size); store_child(off.x + 3u, t);
         return;
     }
     var slot = atomicLoad(&control[C_BEAM_BASE]) + off.y;

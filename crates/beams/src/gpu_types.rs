@@ -58,6 +58,8 @@ pub(crate) struct BeamUniforms {
     bounces: u32,
     exact_trace: u32,
     split_hit_rel: f32,
+    beam_budget: u32,
+    _pad: [u32; 3],
 }
 
 /// Mirrors `FilterUniforms` in filter.wgsl.
@@ -266,6 +268,8 @@ impl BeamUniforms {
             bounces: b.bounces,
             exact_trace: u32::from(b.tracer == Tracer::Bvh),
             split_hit_rel: r.split_hit_rel as f32,
+            beam_budget: if r.levels > 0 { r.beam_budget } else { 0 },
+            _pad: [0; 3],
         }
     }
 }
@@ -320,6 +324,7 @@ mod tests {
                 bounces,
                 exact_trace,
                 split_hit_rel,
+                beam_budget,
             }
         );
         assert_wgsl_layout!(

@@ -35,6 +35,13 @@
 //!   stay whole); the energy criterion is the beam's flux relative to an unrefined
 //!   beam's × A(0)/A(y) where the beam is seen (at its receiver; at its narrowest in a
 //!   medium);
+//! - with `beam_budget` > 0 the refinement spends a beam budget by priority (the
+//!   paper's "convergent beams ... are refined with higher priority", Sect. 4.2, which
+//!   gives no rule): each level ranks the splits the oracle asks for by how much light
+//!   they would misplace in pixels (the largest edge-midpoint deviation, or the size of
+//!   the light a discontinuity cuts) and takes those above a threshold found from the
+//!   level's priority histogram, modelling the children as asking again at half the
+//!   priority; the rest stay leaves (`splits_deferred`);
 //! - all distance impostors (one per specular object, one of the diffuse receivers
 //!   around the generators) share one texture atlas, so each query is one inlined
 //!   search (WGSL inlines every call);
@@ -63,7 +70,8 @@
 //!   impostor passes are then not recorded.
 //!
 //! Passes (names `<method>/<pass>`): `light_gbuffer`, `impostors`, `generate` (compute:
-//! `init_grid`, then per level `decide`, `scan`, `emit`, `advance`, then `finalize`),
+//! `init_grid`, then per level `decide`, `budget` (with a beam budget), `scan`, `emit`,
+//! `advance`, then `finalize`),
 //! `rasterize` (the hulls, one indirect draw) and `surface_filter`.
 
 pub mod config;
@@ -378,10 +386,19 @@ impl BeamMethod {
                 &[("bvh_nodes", &bvh.nodes), ("bvh_triangles", &bvh.triangles)],
             )
             .caller_group(2)
-            .kernels(&["init_grid", "decide", "scan", "emit", "advance", "finalize"])
+            .kernels(&[
+                "init_grid",
+                "decide",
+                "budget",
+                "scan",
+                "emit",
+                "advance",
+                "finalize",
+            ])
             // The kernels dispatched from the indirect arguments must not also bind
             // them as storage (group 2): a buffer is one or the other in a dispatch.
             .kernel_groups("decide", &[0, 1, BVH_GROUP])
+            .kernel_groups("budget", &[0, 1])
             .kernel_groups("scan", &[0, 1])
             .kernel_groups("emit", &[0, 1, BVH_GROUP])
             .build()?;
@@ -544,8 +561,13 @@ impl CausticsMethod for BeamMethod {
             pass.set_bind_group(2, &self.args, &[]);
             let base = 2 * self.config.beams.grid * self.config.beams.grid;
             pass.dispatch("init_grid", [base.div_ceil(64), 1, 1])?;
-            for _ in 0..=self.config.refinement.levels {
+            let ranked = self.config.refinement.beam_budget > 0;
+            for level in 0..=self.config.refinement.levels {
                 pass.dispatch_indirect("decide", &b.indirect_args, 0)?;
+                // The last level splits nothing: no threshold to find.
+                if ranked && level < self.config.refinement.levels {
+                    pass.dispatch("budget", [1, 1, 1])?;
+                }
                 pass.dispatch("scan", [1, 1, 1])?;
                 pass.dispatch_indirect("emit", &b.indirect_args, 0)?;
                 pass.dispatch("advance", [1, 1, 1])?;

@@ -69,9 +69,13 @@ struct BeamUniforms {
     exact_trace: u32,
     // ... and that fraction of the landing edge's length too (relative; 0 = off).
     split_hit_rel: f32,
+    // Beams to aim for: the splits of a level are ranked by priority (0 = every split).
+    beam_budget: u32,
 }
 
-// A triangle of the projected grid in the light's uv space.
+// A triangle of the projected grid in the light's uv space: uv01 corners 0 and 1,
+// uv2_level corner 2, the level and (with beam_budget) the camera size in pixels of
+// the triangle's light where the oracle last measured it (its parent's; generate.wgsl).
 struct Candidate {
     uv01: vec4<f32>,
     uv2_level: vec4<f32>,
