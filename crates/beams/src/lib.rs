@@ -336,6 +336,10 @@ impl BeamMethod {
                     "no light view holds the specular objects".into(),
                 ))
             })?;
+        check_beam_buffers(ctx, config).map_err(|e| MethodError::Param {
+            method: name,
+            message: e.to_string(),
+        })?;
         ctx.checked("beam pipeline setup", || {
             Self::build(ctx, renderer, config, name, &slots, &view)
         })?
@@ -489,6 +493,26 @@ impl BeamMethod {
     pub fn config(&self) -> &BeamConfig {
         &self.config
     }
+}
+
+/// The beam and candidate buffers `max_beams` sizes, against the device's largest
+/// storage binding and the memory budget, before any is made.
+fn check_beam_buffers(ctx: &GpuContext, config: &BeamConfig) -> Result<(), caustics_gpu::GpuError> {
+    let cap = u64::from(config.beams.max_beams);
+    let limits = &ctx.limits;
+    let most = limits.storage_elements(BEAM_BYTES.max(CANDIDATE_BYTES));
+    let raise = format!("lower max_beams (at most {most} on this device)");
+    limits.storage(
+        &format!("max_beams: the beam buffer ({cap} x {BEAM_BYTES} bytes)"),
+        cap * BEAM_BYTES,
+        &raise,
+    )?;
+    // Both candidate lists, the actions, the offsets and the beams.
+    limits.memory(
+        &format!("max_beams: the beam generation buffers ({cap} beams)"),
+        cap * (2 * CANDIDATE_BYTES + 4 + 8 + BEAM_BYTES),
+        &raise,
+    )
 }
 
 /// One atlas of distance impostors: the specular slots in order, then the receivers

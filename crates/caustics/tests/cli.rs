@@ -268,3 +268,100 @@ fn a_closed_stdout_is_not_a_panic() {
         assert_eq!(o.status.code(), Some(0), "{args:?}: {err}");
     }
 }
+
+/// Requests past what the device can hold are refused before anything large is made,
+/// naming the limit and what to lower: a camera image past the device's texture side
+/// or the memory budget (`CAUSTICS_GPU_MEMORY_MIB`, set low here so that the test
+/// needs no large device), a beam buffer and photon hit images past its largest storage
+/// binding (lavapipe: 128 MiB), a budget that is not a number of MiB. Nothing is written.
+#[test]
+fn requests_past_the_devices_limits_are_refused_before_allocating() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let out = tmp.path().join("runs");
+    let out_s = out.display().to_string();
+    let scene = tmp.path().join("huge.json");
+    let mut doc: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/ring.json"),
+        )
+        .expect("ring.json"),
+    )
+    .expect("json");
+    doc["camera"]["width"] = 16384.into();
+    doc["camera"]["height"] = 12288.into();
+    std::fs::write(&scene, doc.to_string()).expect("write scene");
+    let scene_s = scene.display().to_string();
+    let run = |args: &[&str], budget_mib: Option<&str>| {
+        let mut c = Command::new(env!("CARGO_BIN_EXE_caustics"));
+        c.args(["run", "--out", &out_s, "--frames", "1", "--warmup", "0"])
+            .args(["--quick-reference-photons", "0"])
+            .args(args);
+        if let Some(b) = budget_mib {
+            c.env("CAUSTICS_GPU_MEMORY_MIB", b);
+        }
+        let start = std::time::Instant::now();
+        let o = c.output().expect("run caustics");
+        (o, start.elapsed())
+    };
+    for (args, budget, needles) in [
+        (
+            vec!["--scene", scene_s.as_str(), "--method", "static-grid"],
+            None,
+            vec!["camera.width", "16384x12288", "lower camera.width"],
+        ),
+        (
+            vec![
+                "--scene",
+                "ring",
+                "--method",
+                "static-grid",
+                "--param",
+                "max_beams=4194304",
+            ],
+            None,
+            vec!["max_beams", "max_storage_buffer_binding_size", "at most"],
+        ),
+        (
+            vec![
+                "--scene",
+                "sphere_on_plane",
+                "--method",
+                "splatting",
+                "--param",
+                "resolution=1024",
+                "--param",
+                "bounces=4",
+                "--param",
+                "reflections=true",
+            ],
+            None,
+            vec!["resolution", "sheet(s)", "max_storage_buffer_binding_size"],
+        ),
+        (
+            vec!["--scene", "ring", "--method", "static-grid"],
+            Some("32"),
+            vec![
+                "camera-sized targets",
+                "CAUSTICS_GPU_MEMORY_MIB",
+                "32.00 MiB",
+            ],
+        ),
+        (
+            vec!["--scene", "ring", "--method", "static-grid"],
+            Some("0"),
+            vec!["CAUSTICS_GPU_MEMORY_MIB=\"0\"", "whole number of MiB"],
+        ),
+    ] {
+        let (o, took) = run(&args, budget);
+        let e = stderr(&o);
+        assert!(!o.status.success(), "{args:?} succeeded");
+        for n in needles {
+            assert!(e.contains(n), "{args:?}: {n:?} missing from: {e}");
+        }
+        assert!(
+            took < std::time::Duration::from_secs(30),
+            "{args:?} took {took:?} to be refused"
+        );
+    }
+    assert!(!out.exists(), "nothing may be written");
+}

@@ -55,6 +55,9 @@ pub struct GpuContext {
     pub summary: AdapterSummary,
     /// Features enabled on the device.
     pub features: wgpu::Features,
+    /// What a request is checked against before a large allocation: the device's
+    /// limits and the memory budget.
+    pub limits: crate::limits::DeviceLimits,
     /// Device loss and errors raised outside any error scope, recorded by the device's
     /// callbacks instead of wgpu's default (a panic), reported by [`GpuContext::check_device`].
     faults: Arc<Mutex<DeviceFaults>>,
@@ -165,7 +168,11 @@ impl GpuContext {
         }
         let features = REQUIRED_FEATURES | (OPTIONAL_FEATURES & available);
         let adapter_limits = adapter.limits();
+        let memory_budget = crate::limits::DeviceLimits::memory_budget_from_env()?;
         let limits = wgpu::Limits {
+            // The adapter's own texture side (wgpu's default is 8,192), so a large
+            // camera image is refused only where the device cannot hold it.
+            max_texture_dimension_2d: adapter_limits.max_texture_dimension_2d,
             max_storage_buffers_per_shader_stage: adapter_limits
                 .max_storage_buffers_per_shader_stage
                 .min(16),
@@ -201,12 +208,14 @@ impl GpuContext {
                 f.uncaptured.push(e.to_string());
             }
         }));
+        let limits = crate::limits::DeviceLimits::new(&device.limits(), memory_budget);
         Ok(Self {
             summary: summary(&info),
             adapter,
             device,
             queue,
             features,
+            limits,
             faults,
         })
     }

@@ -82,6 +82,19 @@ pub enum GpuError {
     /// A shader failed to parse or validate (naga's report, with the source lines).
     #[error("{0}")]
     Shader(String),
+    /// A resource sized from a user's request is past the device's limits or the memory
+    /// budget ([`crate::limits`]); refused before it is allocated.
+    #[error("{what}: {needed} needed, past {limit}; {raise}")]
+    OverLimit {
+        /// The resource and what sizes it.
+        what: String,
+        /// What it needs.
+        needed: String,
+        /// The limit, named.
+        limit: String,
+        /// How to stay within it.
+        raise: String,
+    },
     /// A resource was asked for with arguments it cannot be built from.
     #[error("invalid GPU resource request: {0}")]
     Invalid(String),

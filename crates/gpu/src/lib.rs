@@ -29,6 +29,7 @@ pub mod gbuffer;
 pub mod impostor;
 pub mod layout;
 pub mod light_view;
+pub mod limits;
 pub mod pass;
 pub mod profiling;
 pub mod readback;

@@ -236,6 +236,21 @@ impl Renderer {
         let far = far * 1.05 + 1e-2;
         let near = (far * 1e-4).max(1e-3);
 
+        // Refused before anything camera-sized is made.
+        let raise = "lower camera.width and camera.height in the scene file";
+        ctx.limits.texture(
+            "the camera image (camera.width x camera.height)",
+            w,
+            h,
+            raise,
+        )?;
+        ctx.limits.memory(
+            &format!(
+                "the camera-sized targets of {w}x{h} (radiance, G-buffer, depth, fill counts)"
+            ),
+            u64::from(w) * u64::from(h) * camera_bytes_per_pixel(),
+            raise,
+        )?;
         let gbuffer_pass = GBufferPass::new(ctx)?;
         let camera_gbuffer = gbuffer_pass.camera_gbuffer(device, cam, near, far)?;
         let (camera_view, camera_projection) = (cam.view(), cam.projection(near, far));
@@ -473,6 +488,16 @@ pub(crate) fn pass_desc<'a>(
         occlusion_query_set: None,
         multiview_mask: None,
     }
+}
+
+/// Bytes per camera pixel of the base renderer's camera-sized resources: the three
+/// radiance targets, the camera G-buffer and its depth, the fill counts.
+fn camera_bytes_per_pixel() -> u64 {
+    use crate::textures::{HDR_FORMAT, IDS_FORMAT, NORMAL_FORMAT, POSITION_FORMAT};
+    let texel = |f: wgpu::TextureFormat| u64::from(f.block_copy_size(None).unwrap_or(16));
+    3 * texel(HDR_FORMAT) + texel(POSITION_FORMAT) + texel(NORMAL_FORMAT) + texel(IDS_FORMAT)
+        + 4 // Depth32Float
+        + 4 // one u32 fill count
 }
 
 #[cfg(test)]

@@ -466,6 +466,29 @@ impl PhotonHits {
         );
         let tan_half = view.tan_half_fov;
         let device = &ctx.device;
+        // The hit images (one per face and sheet) against the device's largest storage
+        // binding and the memory budget, before the light G-buffer and maps are made.
+        let (sheet_count, _) = sheets(kind, config);
+        let faces = view.faces.len() as u64;
+        let texels = faces * u64::from(sheet_count) * u64::from(config.resolution).pow(2);
+        let limit = |e: GpuError| MethodError::Param {
+            method,
+            message: e.to_string(),
+        };
+        let raise = format!(
+            "lower resolution (at most {} hits per generator on this device; every face and sheet is an image of resolution^2)",
+            ctx.limits.storage_elements(HIT_BYTES)
+        );
+        let what = format!(
+            "resolution: the photon hit images ({faces} face(s) x {sheet_count} sheet(s) x {r}x{r} hits of {HIT_BYTES} bytes)",
+            r = config.resolution
+        );
+        ctx.limits
+            .storage(&what, texels * HIT_BYTES, &raise)
+            .map_err(limit)?;
+        ctx.limits
+            .memory(&what, texels * HIT_BYTES, &raise)
+            .map_err(limit)?;
         let (light_gbuffer, maps, uniform, hits, counters) =
             ctx.checked("photon hits setup", || -> Result<_, GpuError> {
                 // §4.1: the first surface the light meets in each texel of its view.

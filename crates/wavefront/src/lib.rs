@@ -381,6 +381,32 @@ impl Wavefront {
                         "cannot build a wavefront for objects[{generator}] under lights[{light_index}]"
                     )))
                 })?;
+                // Before the lattice is uploaded: each sheet traces every source into
+                // a 64-byte record; the device must bind that and the budget hold it.
+                let (source_count, triangle_count) =
+                    (mesh.sources.len() as u64, (mesh.triangles.len() / 3) as u64);
+                let lattice_bytes_needed = std::mem::size_of_val(mesh.sources.as_slice()) as u64
+                    + std::mem::size_of_val(mesh.triangles.as_slice()) as u64;
+                let raise = "lower grid (or, on a heightfield, its resolution: its vertex grid is the lattice)";
+                let what = format!(
+                    "the wavefront of objects[{generator}] ({source_count} rays, {triangle_count} triangles, {} sheet(s))",
+                    masks.len()
+                );
+                let limit = |e: caustics_gpu::GpuError| MethodError::Param {
+                    method: NAME,
+                    message: format!("grid: {e}"),
+                };
+                ctx.limits
+                    .storage(&what, source_count * 64, raise)
+                    .map_err(limit)?;
+                ctx.limits
+                    .memory(
+                        &what,
+                        lattice_bytes_needed
+                            + masks.len() as u64 * (source_count * 64 + triangle_count * 4),
+                        raise,
+                    )
+                    .map_err(limit)?;
                 // One upload of the lattice per (light, generator); its sheets share it.
                 let (sources, triangles) = ctx.checked("wavefront lattice", || {
                     let init = |label: &str, contents: &[u8]| {
