@@ -7,21 +7,20 @@
 //! ([`compare`]) and the static HTML report ([`report`]) build on `run`.
 
 /// `println!` that never panics when stdout is closed early (`caustics list | head -1`:
-/// std's `println!` panics on a broken pipe). What a closed pipe cannot take is dropped;
-/// any other write error is reported on stderr. Used for every line the binary prints.
+/// std's `println!` panics on a broken pipe): [`out!`] with a newline. Used for every
+/// line the binary prints.
 #[macro_export]
 macro_rules! outln {
-    ($($t:tt)*) => {{
-        use std::io::Write as _;
-        if let Err(e) = writeln!(std::io::stdout(), $($t)*) {
-            if e.kind() != std::io::ErrorKind::BrokenPipe {
-                eprintln!("error: writing to stdout: {e}");
-            }
-        }
-    }};
+    () => {
+        $crate::out!("\n")
+    };
+    ($($t:tt)*) => {
+        $crate::out!("{}\n", format_args!($($t)*))
+    };
 }
 
-/// [`outln!`] without the newline.
+/// `print!` that never panics on a closed stdout: what a closed pipe cannot take is
+/// dropped; any other write error is reported on stderr.
 #[macro_export]
 macro_rules! out {
     ($($t:tt)*) => {{

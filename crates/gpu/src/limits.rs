@@ -15,8 +15,8 @@ use crate::GpuError;
 /// Environment variable that sets the GPU memory budget, in MiB.
 pub const MEMORY_BUDGET_ENV: &str = "CAUSTICS_GPU_MEMORY_MIB";
 
-/// Memory budget without [`MEMORY_BUDGET_ENV`]: 8 GiB, what most discrete GPUs of the
-/// papers' successors hold and what lavapipe can take from a 16 GB machine.
+/// Memory budget without [`MEMORY_BUDGET_ENV`]: 8 GiB, a stated default (wgpu reports
+/// no memory size); raise it on a larger device.
 pub const DEFAULT_MEMORY_BUDGET_BYTES: u64 = 8 << 30;
 
 /// The limits a request is checked against.
@@ -28,7 +28,8 @@ pub struct DeviceLimits {
     pub max_storage_binding_bytes: u64,
     /// Largest buffer (`max_buffer_size`), bytes.
     pub max_buffer_bytes: u64,
-    /// What one method's resources may take in all, bytes.
+    /// What one resource (or the buffers one pass sizes together) may take, bytes;
+    /// checked per resource, not summed over a method's resources.
     pub memory_budget_bytes: u64,
 }
 
