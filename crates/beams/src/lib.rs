@@ -39,9 +39,10 @@
 //!   paper's "convergent beams ... are refined with higher priority", Sect. 4.2, which
 //!   gives no rule): each level ranks the splits the oracle asks for by how much light
 //!   they would misplace in pixels (the largest edge-midpoint deviation, or the size of
-//!   the light a discontinuity cuts) and takes those above a threshold found from the
-//!   level's priority histogram, modelling the children as asking again at half the
-//!   priority; the rest stay leaves (`splits_deferred`);
+//!   the light a discontinuity cuts) and, coarse levels first, takes those above a
+//!   threshold found from the level's priority histogram while their children (four
+//!   beams per beam at stake) fit the beams left; the rest stay leaves
+//!   (`splits_deferred`);
 //! - all distance impostors (one per specular object, one of the diffuse receivers
 //!   around the generators) share one texture atlas, so each query is one inlined
 //!   search (WGSL inlines every call);
@@ -80,10 +81,11 @@ pub mod geometry;
 mod gpu_types;
 
 use caustics_gpu::impostor::{IMPOSTOR_TRACE_WGSL, ImpostorAtlas, ImpostorPass};
+use caustics_gpu::limits::Reservation;
 use caustics_gpu::pass::{ComputePass, RasterPass, Shader};
 use caustics_gpu::textures::{HDR_FORMAT, Target, additive_hdr_target, load_attachment};
 use caustics_gpu::wgpu::{self, util::DeviceExt};
-use caustics_gpu::{Frame, GBuffer, GpuContext, LightView, Renderer, shader};
+use caustics_gpu::{Frame, GBuffer, GpuContext, GpuError, LightView, Renderer, shader};
 use caustics_method::{Capabilities, CausticsMethod, Counters, MethodError, Unsupported};
 use caustics_scene::{Scene, Vec3};
 
@@ -222,15 +224,19 @@ struct Buffers {
     control_init: wgpu::Buffer,
     indirect_args: wgpu::Buffer,
     filter_uniforms: wgpu::Buffer,
+    /// The `max_beams` buffers' bytes in the device's memory ledger.
+    _memory: Reservation,
 }
 
 impl Buffers {
     fn new(
-        device: &wgpu::Device,
+        ctx: &GpuContext,
         camera: &caustics_scene::Camera,
         config: &BeamConfig,
         uniforms: &BeamUniforms,
-    ) -> Self {
+        memory: Reservation,
+    ) -> Result<Self, GpuError> {
+        let device = &ctx.device;
         let init = |label: &str, contents: &[u8], usage| {
             device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some(label),
@@ -250,16 +256,16 @@ impl Buffers {
         let none = wgpu::BufferUsages::empty();
         let copy = wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC;
         let filter = FilterUniforms::new(config.beams.surface_filter_px);
-        Self {
+        Ok(Self {
             raw_surface: Target::new(
-                device,
+                ctx,
                 "beam raw surface caustic",
                 HDR_FORMAT,
                 camera.width,
                 camera.height,
                 1,
                 wgpu::TextureUsages::empty(),
-            ),
+            )?,
             uniforms: init(
                 "beam uniforms",
                 bytemuck::bytes_of(uniforms),
@@ -282,7 +288,8 @@ impl Buffers {
                 bytemuck::bytes_of(&filter),
                 wgpu::BufferUsages::UNIFORM,
             ),
-        }
+            _memory: memory,
+        })
     }
 
     fn bytes(&self) -> u64 {
@@ -336,12 +343,12 @@ impl BeamMethod {
                     "no light view holds the specular objects".into(),
                 ))
             })?;
-        check_beam_buffers(ctx, config).map_err(|e| MethodError::Param {
+        let memory = reserve_beam_buffers(ctx, config).map_err(|e| MethodError::Param {
             method: name,
             message: e.to_string(),
         })?;
         ctx.checked("beam pipeline setup", || {
-            Self::build(ctx, renderer, config, name, &slots, &view)
+            Self::build(ctx, renderer, config, name, &slots, &view, memory)
         })?
     }
 
@@ -354,14 +361,15 @@ impl BeamMethod {
         name: &'static str,
         slots: &[Slot],
         view: &LightView,
+        memory: Reservation,
     ) -> Result<Self, MethodError> {
         let device = &ctx.device;
         let scene = &renderer.scene().scene;
-        let light_gbuffer = renderer.gbuffer_pass().light_gbuffer(device, view)?;
+        let light_gbuffer = renderer.gbuffer_pass().light_gbuffer(ctx, view)?;
         let impostor_pass = ImpostorPass::new(ctx)?;
-        let atlas = impostor_atlas(device, renderer, &impostor_pass, slots, config)?;
+        let atlas = impostor_atlas(ctx, renderer, &impostor_pass, slots, config)?;
         let uniforms = BeamUniforms::new(scene, config, view, slots, &atlas);
-        let b = Buffers::new(device, &scene.camera, config, &uniforms);
+        let b = Buffers::new(ctx, &scene.camera, config, &uniforms, memory)?;
 
         // Built (once per scene) also for the impostor tracer: the pass binds it either way.
         let bvh = renderer.scene().triangle_bvh(ctx)?;
@@ -496,10 +504,24 @@ impl BeamMethod {
 }
 
 /// The beam and candidate buffers `max_beams` sizes, against the device's largest
-/// storage binding and the memory budget, before any is made.
-fn check_beam_buffers(ctx: &GpuContext, config: &BeamConfig) -> Result<(), caustics_gpu::GpuError> {
-    let cap = u64::from(config.beams.max_beams);
+/// storage binding and the memory budget (summed with what is held), reserved before
+/// any is made.
+fn reserve_beam_buffers(ctx: &GpuContext, config: &BeamConfig) -> Result<Reservation, GpuError> {
     let limits = &ctx.limits;
+    // The light G-buffer and the impostors are textures (their bytes are reserved as
+    // they are made); their sides are checked here, naming the parameter.
+    for (name, side) in [
+        ("light_resolution", config.beams.light_resolution),
+        ("impostor_resolution", config.beams.impostor_resolution),
+    ] {
+        limits.texture(
+            &format!("{name}: a {side}x{side} texture"),
+            side,
+            side,
+            &format!("lower {name}"),
+        )?;
+    }
+    let cap = u64::from(config.beams.max_beams);
     let most = limits.storage_elements(BEAM_BYTES.max(CANDIDATE_BYTES));
     let raise = format!("lower max_beams (at most {most} on this device)");
     limits.storage(
@@ -508,7 +530,7 @@ fn check_beam_buffers(ctx: &GpuContext, config: &BeamConfig) -> Result<(), caust
         &raise,
     )?;
     // Both candidate lists, the actions, the offsets and the beams.
-    limits.memory(
+    ctx.memory.reserve(
         &format!("max_beams: the beam generation buffers ({cap} beams)"),
         cap * (2 * CANDIDATE_BYTES + 4 + 8 + BEAM_BYTES),
         &raise,
@@ -518,7 +540,7 @@ fn check_beam_buffers(ctx: &GpuContext, config: &BeamConfig) -> Result<(), caust
 /// One atlas of distance impostors: the specular slots in order, then the receivers
 /// around the generators' centre (Umenhoffer's distance map of the environment).
 fn impostor_atlas(
-    device: &wgpu::Device,
+    ctx: &GpuContext,
     renderer: &Renderer,
     pass: &ImpostorPass,
     slots: &[Slot],
@@ -537,12 +559,7 @@ fn impostor_atlas(
     let mut entries: Vec<(Vec<usize>, Option<Vec3>)> =
         slots.iter().map(|s| (vec![s.object], s.center)).collect();
     entries.push((receivers, specular_center));
-    Ok(pass.atlas(
-        device,
-        gpu_scene,
-        &entries,
-        config.beams.impostor_resolution,
-    )?)
+    Ok(pass.atlas(ctx, gpu_scene, &entries, config.beams.impostor_resolution)?)
 }
 
 /// Group 2 of the generate pass: the indirect arguments `buffer`.

@@ -54,10 +54,11 @@
 
 use bytemuck::{Pod, Zeroable};
 use caustics_gpu::buffers::{storage_buffer, uniform_buffer};
+use caustics_gpu::limits::Reservation;
 use caustics_gpu::pass::{ComputePass, RasterPass, Shader};
 use caustics_gpu::textures::additive_hdr_target;
 use caustics_gpu::wgpu;
-use caustics_gpu::{Frame, GpuContext, Renderer};
+use caustics_gpu::{Frame, GpuContext, GpuError, Renderer};
 use caustics_method::params::closed;
 use caustics_method::{
     Capabilities, CausticsMethod, CounterDoc, Counters, Method, MethodError, Unsupported,
@@ -225,6 +226,8 @@ struct TriangleBuffers {
     vertex_irradiance: wgpu::Buffer,
     /// One per `TRI_*` reason.
     tri_counters: wgpu::Buffer,
+    /// The areas' and irradiances' bytes in the device's memory ledger.
+    _memory: [Reservation; 2],
 }
 
 impl TriangleBuffers {
@@ -236,6 +239,32 @@ impl TriangleBuffers {
         vertex_area: VertexArea,
     ) -> Result<Self, MethodError> {
         let device = &ctx.device;
+        // Both sized by the photon hit image (the resolution parameter): bound whole,
+        // summed with every live resource, refused naming it.
+        let raise = "lower resolution";
+        let param = |e: GpuError| MethodError::Param {
+            method: NAME,
+            message: e.to_string(),
+        };
+        let tri_area_bytes = triangle_count.max(1) as u64 * 4;
+        let irradiance_bytes = hits.texels() as u64 * 16;
+        let memory = [
+            ctx.reserve_storage(
+                &format!("resolution: the caustic triangle areas ({triangle_count} x 4 bytes)"),
+                tri_area_bytes,
+                raise,
+            )
+            .map_err(param)?,
+            ctx.reserve_storage(
+                &format!(
+                    "resolution: the caustic vertex irradiances ({} x 16 bytes)",
+                    hits.texels()
+                ),
+                irradiance_bytes,
+                raise,
+            )
+            .map_err(param)?,
+        ];
         Ok(ctx.checked("caustic-triangles setup", || {
             let uniform = TriUniform {
                 layers: hits.layers,
@@ -248,19 +277,15 @@ impl TriangleBuffers {
             };
             Self {
                 uniform: uniform_buffer(device, "caustic triangles params", &uniform),
-                tri_area: storage_buffer(
-                    device,
-                    "caustic triangle areas",
-                    triangle_count.max(1) as u64 * 4,
-                    false,
-                ),
+                tri_area: storage_buffer(device, "caustic triangle areas", tri_area_bytes, false),
                 vertex_irradiance: storage_buffer(
                     device,
                     "caustic vertex irradiance",
-                    hits.texels() as u64 * 16,
+                    irradiance_bytes,
                     false,
                 ),
                 tri_counters: storage_buffer(device, "caustic triangle counters", 4 * 8, true),
+                _memory: memory,
             }
         })?)
     }

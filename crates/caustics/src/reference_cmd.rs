@@ -7,7 +7,9 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 use caustics_metrics::{HdrImage, luminance};
-use caustics_reference::{Reference, ReferenceImage, ReferenceOptions, ReferenceResult};
+use caustics_reference::{
+    Reference, ReferenceImage, ReferenceOptions, ReferenceResult, memory_budget_from_env,
+};
 use caustics_scene::Scene;
 use indicatif::{ProgressBar, ProgressStyle};
 
@@ -130,7 +132,7 @@ pub fn reference(args: &ReferenceArgs) -> Result<()> {
         Some(d) => d.clone(),
         None => cache_dir(&args.references, &scene),
     };
-    let tracer = Reference::new(&scene)?;
+    let tracer = Reference::new(&scene)?.with_memory_budget(memory_budget_from_env()?);
     let bar = progress_bar(args.photons);
     let tick = |done: u64| bar.set_position(done);
     let result = match (args.photons, args.time) {
@@ -167,7 +169,7 @@ pub fn render_into(
     if photons == 0 || batches < 2 {
         bail!("a reference needs photons > 0 and at least 2 batches");
     }
-    let tracer = Reference::new(scene)?;
+    let tracer = Reference::new(scene)?.with_memory_budget(memory_budget_from_env()?);
     let opts = ReferenceOptions {
         photons,
         batches,
@@ -232,7 +234,7 @@ fn bench(args: &ReferenceArgs) -> Result<()> {
     );
     for name in ["sphere_on_plane", "ring", "water_pool"] {
         let scene = Scene::load(&caustics_scene::resolve(name)?)?;
-        let tracer = Reference::new(&scene)?;
+        let tracer = Reference::new(&scene)?.with_memory_budget(memory_budget_from_env()?);
         let start = Instant::now();
         let r = tracer.render(&options(args, photons), &|_| {})?;
         let s = start.elapsed().as_secs_f64();

@@ -63,6 +63,64 @@ fn bad_reference_options_fail_clearly() {
 }
 
 #[test]
+fn a_reference_past_the_cpu_memory_budget_is_refused_and_writes_nothing() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let refs = tmp.path().join("references");
+    let refs_s = refs.display().to_string();
+    for (budget, needles) in [
+        // ring at 1024x768 with 16 batches: 22 MB of images before any photon.
+        (
+            "1",
+            vec![
+                "1024x768",
+                "16 batches",
+                "CAUSTICS_CPU_MEMORY_MIB",
+                "1.00 MiB",
+                "lower camera.width",
+            ],
+        ),
+        (
+            "lots",
+            vec!["CAUSTICS_CPU_MEMORY_MIB=\"lots\"", "whole number of MiB"],
+        ),
+    ] {
+        let start = std::time::Instant::now();
+        let o = Command::new(env!("CARGO_BIN_EXE_caustics"))
+            .args(["reference", "--scene", "ring", "--photons", "1000000"])
+            .args(["--references", &refs_s])
+            .env("CAUSTICS_CPU_MEMORY_MIB", budget)
+            .output()
+            .expect("run caustics");
+        let e = stderr(&o);
+        assert!(!o.status.success(), "budget {budget}: succeeded");
+        for n in needles {
+            assert!(e.contains(n), "budget {budget}: {n:?} missing from: {e}");
+        }
+        assert!(
+            start.elapsed() < std::time::Duration::from_secs(30),
+            "budget {budget}: refused after {:?}",
+            start.elapsed()
+        );
+    }
+    let written: Vec<_> = walk(&refs);
+    assert!(written.is_empty(), "nothing may be written: {written:?}");
+}
+
+/// Every file under `dir` (none if it does not exist).
+fn walk(dir: &Path) -> Vec<std::path::PathBuf> {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return Vec::new();
+    };
+    entries
+        .flatten()
+        .flat_map(|e| {
+            let p = e.path();
+            if p.is_dir() { walk(&p) } else { vec![p] }
+        })
+        .collect()
+}
+
+#[test]
 fn a_rendered_reference_is_cached_and_used_by_run() {
     let tmp = tempfile::tempdir().expect("tempdir");
     let scene = small_scene(tmp.path(), "water_pool", 64, 48);

@@ -8,10 +8,13 @@
 //! method's `parse`: no panic, and the values that should be refused but are
 //! accepted are listed.
 //!
-//! The generator is SplitMix64, as in `crates/scene/tests/fuzz_loaders.rs` (no new
-//! dev-dependency). `cargo test -p caustics --test fuzz_parsers -- --nocapture` prints
+//! The generator is SplitMix64, the one copy in `crates/scene/tests/common/split_mix.rs`
+//! (no new dev-dependency). `cargo test -p caustics --test fuzz_parsers -- --nocapture` prints
 //! the counts; `FUZZ_SEED=<n>` picks another seed (default 18), `FUZZ_N=<n>` the
 //! mutations per family (default 300).
+
+#[path = "../../scene/tests/common/split_mix.rs"]
+mod split_mix;
 
 use std::collections::BTreeMap;
 use std::panic::{AssertUnwindSafe, catch_unwind};
@@ -21,35 +24,11 @@ use std::time::{Duration, Instant};
 use caustics::experiment::Experiment;
 use caustics::reproduce::{ReproduceArgs, read_manifest, reproduce};
 use serde_json::{Value, json};
+use split_mix::{SplitMix, env_or};
 
 /// The longest one read may take (debug build, 2 busy cores; reads take milliseconds,
 /// an experiment load with every scene a few hundred).
 const MAX_READ: Duration = Duration::from_secs(10);
-
-struct SplitMix(u64);
-
-impl SplitMix {
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n.max(1) as u64) as usize
-    }
-    fn pick<'a, T>(&mut self, xs: &'a [T]) -> &'a T {
-        &xs[self.below(xs.len())]
-    }
-}
-
-fn env_or(name: &str, default: u64) -> u64 {
-    std::env::var(name)
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(default)
-}
 
 /// Number texts that break parsers: NaN-ish strings, overflow, negatives, huge ints.
 const NUMBERS: &[&str] = &[

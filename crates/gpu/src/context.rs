@@ -58,6 +58,8 @@ pub struct GpuContext {
     /// What a request is checked against before a large allocation: the device's
     /// limits and the memory budget.
     pub limits: crate::limits::DeviceLimits,
+    /// The ledger of GPU memory every live resource holds, summed against the budget.
+    pub memory: Arc<crate::limits::GpuMemory>,
     /// Device loss and errors raised outside any error scope, recorded by the device's
     /// callbacks instead of wgpu's default (a panic), reported by [`GpuContext::check_device`].
     faults: Arc<Mutex<DeviceFaults>>,
@@ -216,8 +218,22 @@ impl GpuContext {
             queue,
             features,
             limits,
+            memory: crate::limits::GpuMemory::new(memory_budget),
             faults,
         })
+    }
+
+    /// Checks a storage buffer of `bytes`, bound whole, against the device's largest
+    /// binding and holds its bytes in the memory ledger (summed with every live
+    /// resource): call before creating it, and keep the reservation beside it.
+    pub fn reserve_storage(
+        &self,
+        what: &str,
+        bytes: u64,
+        raise: &str,
+    ) -> Result<crate::limits::Reservation, GpuError> {
+        self.limits.storage(what, bytes, raise)?;
+        self.memory.reserve(what, bytes, raise)
     }
 
     /// Fails if the device was lost (driver reset, out of memory on the device, or

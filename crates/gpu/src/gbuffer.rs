@@ -145,24 +145,20 @@ impl GBufferPass {
     }
 
     /// Allocates a depth-only view of the light (the shadow map), one layer per face.
-    pub fn shadow_map(
-        &self,
-        device: &wgpu::Device,
-        view: &LightView,
-    ) -> Result<ShadowMap, GpuError> {
+    pub fn shadow_map(&self, ctx: &GpuContext, view: &LightView) -> Result<ShadowMap, GpuError> {
         let layers = view.faces.len() as u32;
         let res = view.resolution;
         Ok(ShadowMap {
             depth: Target::new(
-                device,
+                ctx,
                 "shadow map",
                 DEPTH_FORMAT,
                 res,
                 res,
                 layers,
                 wgpu::TextureUsages::empty(),
-            ),
-            views: self.view_binds(device, "shadow map", &light_view_uniforms(view))?,
+            )?,
+            views: self.view_binds(&ctx.device, "shadow map", &light_view_uniforms(view))?,
             size: (res, res),
         })
     }
@@ -185,7 +181,7 @@ impl GBufferPass {
 
     fn allocate(
         &self,
-        device: &wgpu::Device,
+        ctx: &GpuContext,
         label: &str,
         width: u32,
         height: u32,
@@ -193,44 +189,44 @@ impl GBufferPass {
     ) -> Result<GBuffer, GpuError> {
         let layers = views.len() as u32;
         let none = wgpu::TextureUsages::empty();
-        let views = self.view_binds(device, label, views)?;
+        let views = self.view_binds(&ctx.device, label, views)?;
         Ok(GBuffer {
             position: Target::new(
-                device,
+                ctx,
                 &format!("{label} position"),
                 POSITION_FORMAT,
                 width,
                 height,
                 layers,
                 none,
-            ),
+            )?,
             normal: Target::new(
-                device,
+                ctx,
                 &format!("{label} normal"),
                 NORMAL_FORMAT,
                 width,
                 height,
                 layers,
                 none,
-            ),
+            )?,
             ids: Target::new(
-                device,
+                ctx,
                 &format!("{label} ids"),
                 IDS_FORMAT,
                 width,
                 height,
                 layers,
                 none,
-            ),
+            )?,
             depth: Target::new(
-                device,
+                ctx,
                 &format!("{label} depth"),
                 DEPTH_FORMAT,
                 width,
                 height,
                 layers,
                 none,
-            ),
+            )?,
             views,
             size: (width, height),
         })
@@ -239,7 +235,7 @@ impl GBufferPass {
     /// Allocates the camera G-buffer at the camera's resolution.
     pub fn camera_gbuffer(
         &self,
-        device: &wgpu::Device,
+        ctx: &GpuContext,
         camera: &Camera,
         near: f32,
         far: f32,
@@ -249,17 +245,13 @@ impl GBufferPass {
             view_proj: vp.to_cols_array_2d(),
             eye: camera.eye.extend(1.0).to_array(),
         };
-        self.allocate(device, "camera gbuffer", camera.width, camera.height, &[u])
+        self.allocate(ctx, "camera gbuffer", camera.width, camera.height, &[u])
     }
 
     /// Allocates a light G-buffer, one layer per face of `view`.
-    pub fn light_gbuffer(
-        &self,
-        device: &wgpu::Device,
-        view: &LightView,
-    ) -> Result<GBuffer, GpuError> {
+    pub fn light_gbuffer(&self, ctx: &GpuContext, view: &LightView) -> Result<GBuffer, GpuError> {
         self.allocate(
-            device,
+            ctx,
             "light gbuffer",
             view.resolution,
             view.resolution,

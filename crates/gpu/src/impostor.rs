@@ -112,21 +112,21 @@ impl ImpostorPass {
     /// Allocates an impostor of `objects` around the centre of their bounds.
     pub fn impostor(
         &self,
-        device: &wgpu::Device,
+        ctx: &GpuContext,
         scene: &GpuScene,
         objects: &[usize],
         resolution: u32,
     ) -> Result<DistanceImpostor, GpuError> {
         let bounds = objects_bounds(scene, objects)
             .ok_or_else(|| GpuError::Invalid("distance impostor of no objects".into()))?;
-        self.impostor_around(device, scene, objects, bounds.center(), resolution)
+        self.impostor_around(ctx, scene, objects, bounds.center(), resolution)
     }
 
     /// Allocates an impostor of `objects` around `center` (e.g. the diffuse receivers
     /// around a refractor's centre, Umenhoffer's distance map of the environment).
     pub fn impostor_around(
         &self,
-        device: &wgpu::Device,
+        ctx: &GpuContext,
         scene: &GpuScene,
         objects: &[usize],
         center: Vec3,
@@ -138,36 +138,36 @@ impl ImpostorPass {
             return Err(GpuError::Invalid("distance impostor resolution 0".into()));
         }
         let reach = reach_from(&bounds, center);
-        let views = self.face_binds(device, center, reach)?;
+        let views = self.face_binds(&ctx.device, center, reach)?;
         let none = wgpu::TextureUsages::empty();
         Ok(DistanceImpostor {
             normal_distance: Target::new(
-                device,
+                ctx,
                 "impostor normal+distance",
                 IMPOSTOR_FORMAT,
                 resolution,
                 resolution,
                 6,
                 none,
-            ),
+            )?,
             object_ids: Target::new(
-                device,
+                ctx,
                 "impostor object",
                 IMPOSTOR_IDS_FORMAT,
                 resolution,
                 resolution,
                 6,
                 none,
-            ),
+            )?,
             depth: Target::new(
-                device,
+                ctx,
                 "impostor depth",
                 DEPTH_FORMAT,
                 resolution,
                 resolution,
                 6,
                 none,
-            ),
+            )?,
             views,
             center,
             reach,
@@ -208,7 +208,7 @@ impl ImpostorPass {
     /// (`impostor_trace_at` with `6 × index` as the first layer).
     pub fn atlas(
         &self,
-        device: &wgpu::Device,
+        ctx: &GpuContext,
         scene: &GpuScene,
         entries: &[(Vec<usize>, Option<Vec3>)],
         resolution: u32,
@@ -229,26 +229,25 @@ impl ImpostorPass {
                 objects: objects.clone(),
                 center,
                 reach,
-                views: self.face_binds(device, center, reach)?,
+                views: self.face_binds(&ctx.device, center, reach)?,
             });
         }
         let layers = 6 * entries.len() as u32;
         let none = wgpu::TextureUsages::empty();
-        let target = |label, format| {
-            Target::new(device, label, format, resolution, resolution, layers, none)
-        };
+        let target =
+            |label, format| Target::new(ctx, label, format, resolution, resolution, layers, none);
         Ok(ImpostorAtlas {
-            normal_distance: target("impostor atlas normal+distance", IMPOSTOR_FORMAT),
-            object_ids: target("impostor atlas object", IMPOSTOR_IDS_FORMAT),
+            normal_distance: target("impostor atlas normal+distance", IMPOSTOR_FORMAT)?,
+            object_ids: target("impostor atlas object", IMPOSTOR_IDS_FORMAT)?,
             depth: Target::new(
-                device,
+                ctx,
                 "impostor atlas depth",
                 DEPTH_FORMAT,
                 resolution,
                 resolution,
                 1,
                 none,
-            ),
+            )?,
             entries: out,
             resolution,
         })

@@ -9,8 +9,21 @@
 //! requests at the adapter's values for texture sides and buffer sizes). wgpu reports
 //! no memory size, so the memory budget is a stated number: [`DEFAULT_MEMORY_BUDGET_BYTES`],
 //! or [`MEMORY_BUDGET_ENV`] in MiB.
+//!
+//! The budget is summed, not per resource: [`GpuMemory`] is one ledger per device of
+//! what every live resource holds (the scene's buffers, the camera-sized targets, each
+//! method's textures and buffers). A resource reserves its bytes before it is made and
+//! gives them back when dropped ([`Reservation`]), so a method that would fit alone but
+//! not beside the camera targets and the scene is refused, naming what already holds
+//! the budget.
+
+use std::collections::BTreeMap;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Arc, Mutex};
 
 use crate::GpuError;
+
+pub use caustics_scene::{format_bytes, parse_mib};
 
 /// Environment variable that sets the GPU memory budget, in MiB.
 pub const MEMORY_BUDGET_ENV: &str = "CAUSTICS_GPU_MEMORY_MIB";
@@ -28,8 +41,8 @@ pub struct DeviceLimits {
     pub max_storage_binding_bytes: u64,
     /// Largest buffer (`max_buffer_size`), bytes.
     pub max_buffer_bytes: u64,
-    /// What one resource (or the buffers one pass sizes together) may take, bytes;
-    /// checked per resource, not summed over a method's resources.
+    /// What all live resources together may hold, bytes (the ledger, [`GpuMemory`],
+    /// sums them against it).
     pub memory_budget_bytes: u64,
 }
 
@@ -98,56 +111,145 @@ impl DeviceLimits {
         Ok(())
     }
 
-    /// Resources of `bytes` in all.
-    pub fn memory(&self, what: &str, bytes: u64, raise: &str) -> Result<(), GpuError> {
-        if bytes > self.memory_budget_bytes {
-            return Err(GpuError::OverLimit {
-                what: what.to_owned(),
-                needed: format_bytes(bytes),
-                limit: format!(
-                    "the GPU memory budget, {} (set {MEMORY_BUDGET_ENV} in MiB to change it)",
-                    format_bytes(self.memory_budget_bytes)
-                ),
-                raise: raise.to_owned(),
-            });
-        }
-        Ok(())
-    }
-
     /// How many elements of `element_bytes` one storage binding holds.
     pub fn storage_elements(&self, element_bytes: u64) -> u64 {
         self.max_storage_binding_bytes.min(self.max_buffer_bytes) / element_bytes.max(1)
     }
 }
 
-fn parse_mib(text: &str) -> Option<u64> {
-    let mib: u64 = text.trim().parse().ok()?;
-    (mib > 0).then(|| mib.checked_mul(1 << 20)).flatten()
+/// The GPU memory ledger of one device: what every live resource holds, summed against
+/// the memory budget. Shared ([`Arc`]) by the context and every [`Reservation`].
+#[derive(Debug)]
+pub struct GpuMemory {
+    budget_bytes: u64,
+    next_id: AtomicU64,
+    /// Live reservations by id: what holds them and how many bytes.
+    held: Mutex<BTreeMap<u64, (String, u64)>>,
 }
 
-/// `bytes` as a reader wants it: "1.06 GiB (1,140,850,688 bytes)".
-pub fn format_bytes(bytes: u64) -> String {
-    const UNITS: [&str; 4] = ["KiB", "MiB", "GiB", "TiB"];
-    let mut grouped = String::new();
-    for (i, c) in bytes.to_string().chars().rev().enumerate() {
-        if i > 0 && i % 3 == 0 {
-            grouped.push(',');
-        }
-        grouped.push(c);
+/// Bytes held in the ledger by one resource (or the buffers one pass sizes together),
+/// given back when dropped: keep it beside the resource it stands for.
+#[derive(Debug)]
+pub struct Reservation {
+    ledger: Arc<GpuMemory>,
+    id: u64,
+    bytes: u64,
+}
+
+impl Reservation {
+    /// Bytes held.
+    pub fn bytes(&self) -> u64 {
+        self.bytes
     }
-    let grouped: String = grouped.chars().rev().collect();
-    let mut value = bytes as f64;
-    let mut unit = None;
-    for u in UNITS {
-        if value < 1024.0 {
-            break;
+}
+
+impl Drop for Reservation {
+    fn drop(&mut self) {
+        if let Ok(mut held) = self.ledger.held.lock() {
+            held.remove(&self.id);
         }
-        value /= 1024.0;
-        unit = Some(u);
     }
-    match unit {
-        None => format!("{grouped} bytes"),
-        Some(u) => format!("{value:.2} {u} ({grouped} bytes)"),
+}
+
+/// How many holders a refusal names (the largest first).
+const HOLDERS_NAMED: usize = 4;
+
+impl GpuMemory {
+    /// An empty ledger under `budget_bytes`.
+    pub fn new(budget_bytes: u64) -> Arc<Self> {
+        Arc::new(Self {
+            budget_bytes,
+            next_id: AtomicU64::new(0),
+            held: Mutex::new(BTreeMap::new()),
+        })
+    }
+
+    /// The budget, bytes.
+    pub fn budget_bytes(&self) -> u64 {
+        self.budget_bytes
+    }
+
+    /// Bytes held by live reservations.
+    pub fn held_bytes(&self) -> u64 {
+        self.held
+            .lock()
+            .map(|h| h.values().map(|(_, b)| b).sum())
+            .unwrap_or(0)
+    }
+
+    /// Checks that `bytes` more fit beside what is held, without holding them: for a
+    /// request whose resources reserve their own bytes as they are made (the whole
+    /// request is refused before the first of them).
+    pub fn check(&self, what: &str, bytes: u64, raise: &str) -> Result<(), GpuError> {
+        let held = self
+            .held
+            .lock()
+            .map_err(|_| GpuError::Invalid("GPU memory ledger poisoned".into()))?;
+        self.fits(&held, what, bytes, raise)
+    }
+
+    /// Holds `bytes` for `what` until the returned reservation is dropped, if they fit
+    /// beside what is held; else refuses, naming the budget, the largest holders and
+    /// `raise`.
+    pub fn reserve(
+        self: &Arc<Self>,
+        what: &str,
+        bytes: u64,
+        raise: &str,
+    ) -> Result<Reservation, GpuError> {
+        let mut held = self
+            .held
+            .lock()
+            .map_err(|_| GpuError::Invalid("GPU memory ledger poisoned".into()))?;
+        self.fits(&held, what, bytes, raise)?;
+        let id = self.next_id.fetch_add(1, Ordering::Relaxed);
+        held.insert(id, (what.to_owned(), bytes));
+        Ok(Reservation {
+            ledger: Arc::clone(self),
+            id,
+            bytes,
+        })
+    }
+
+    fn fits(
+        &self,
+        held: &BTreeMap<u64, (String, u64)>,
+        what: &str,
+        bytes: u64,
+        raise: &str,
+    ) -> Result<(), GpuError> {
+        let in_use: u64 = held.values().map(|(_, b)| b).sum();
+        if in_use.saturating_add(bytes) <= self.budget_bytes {
+            return Ok(());
+        }
+        let held_by = if in_use == 0 {
+            String::new()
+        } else {
+            let mut holders: Vec<&(String, u64)> = held.values().collect();
+            holders.sort_by_key(|h| std::cmp::Reverse(h.1));
+            let mut named: Vec<String> = holders
+                .iter()
+                .take(HOLDERS_NAMED)
+                .map(|(w, b)| format!("{w}: {}", format_bytes(*b)))
+                .collect();
+            if holders.len() > HOLDERS_NAMED {
+                named.push(format!("{} more", holders.len() - HOLDERS_NAMED));
+            }
+            format!(
+                ", with {} of it already held ({})",
+                format_bytes(in_use),
+                named.join("; ")
+            )
+        };
+        Err(GpuError::OverLimit {
+            what: what.to_owned(),
+            needed: format_bytes(bytes),
+            limit: format!(
+                "the GPU memory budget, {}, summed over every live resource{held_by} (set {MEMORY_BUDGET_ENV} in MiB to change it)",
+                format_bytes(self.budget_bytes)
+            ),
+            raise: raise.to_owned(),
+        })
     }
 }
 
@@ -198,25 +300,48 @@ mod tests {
                 && e.contains("lower max_beams"),
             "{e}"
         );
-        let e = l
-            .memory("beam buffers", 3 << 30, "lower max_beams")
-            .expect_err("past the budget")
-            .to_string();
-        assert!(
-            e.contains(MEMORY_BUDGET_ENV) && e.contains("3.00 GiB"),
-            "{e}"
-        );
         assert_eq!(l.storage_elements(288), (128 << 20) / 288);
     }
 
     #[test]
-    fn the_memory_budget_is_whole_mib() {
-        assert_eq!(parse_mib("512"), Some(512 << 20));
-        assert_eq!(parse_mib(" 1 "), Some(1 << 20));
-        for bad in ["0", "-1", "1.5", "", "lots", "18446744073709551615"] {
-            assert_eq!(parse_mib(bad), None, "{bad:?}");
-        }
-        assert_eq!(format_bytes(999), "999 bytes");
-        assert_eq!(format_bytes(1536), "1.50 KiB (1,536 bytes)");
+    fn the_budget_is_summed_over_live_reservations() {
+        let ledger = GpuMemory::new(1 << 30);
+        let e = ledger
+            .reserve("beam buffers", 3 << 30, "lower max_beams")
+            .expect_err("past the budget alone")
+            .to_string();
+        assert!(
+            e.contains(MEMORY_BUDGET_ENV) && e.contains("3.00 GiB") && !e.contains("already held"),
+            "{e}"
+        );
+        let camera = ledger
+            .reserve("camera targets", 600 << 20, "lower camera.width")
+            .expect("fits alone");
+        let scene = ledger
+            .reserve("scene buffers", 100 << 20, "fewer triangles")
+            .expect("fits beside the camera");
+        assert_eq!(ledger.held_bytes(), 700 << 20);
+        // 400 MiB fits alone, not beside the 700 held: refused, naming the holders.
+        ledger
+            .check("hit images", 300 << 20, "lower resolution")
+            .expect("324 MiB are left");
+        let e = ledger
+            .reserve("hit images", 400 << 20, "lower resolution")
+            .expect_err("past the budget summed")
+            .to_string();
+        assert!(
+            e.starts_with("hit images: 400.00 MiB (419,430,400 bytes) needed, past the GPU memory budget, 1.00 GiB")
+                && e.contains("with 700.00 MiB (734,003,200 bytes) of it already held (camera targets: 600.00 MiB (629,145,600 bytes); scene buffers: 100.00 MiB (104,857,600 bytes))")
+                && e.ends_with("lower resolution"),
+            "{e}"
+        );
+        assert_eq!(ledger.held_bytes(), 700 << 20, "a refusal holds nothing");
+        drop(camera);
+        let hits = ledger
+            .reserve("hit images", 400 << 20, "lower resolution")
+            .expect("fits once the camera targets are given back");
+        assert_eq!(hits.bytes(), 400 << 20);
+        drop((scene, hits));
+        assert_eq!(ledger.held_bytes(), 0);
     }
 }

@@ -8,6 +8,7 @@ use wgpu::util::DeviceExt;
 
 use crate::frame::Frame;
 use crate::gbuffer::{GBuffer, GBufferPass, LightProjection, LightView, ShadowMap, ViewUniform};
+use crate::limits::Reservation;
 use crate::pass::{BindGroupSchema, RasterPass, Shader};
 use crate::profiling::{FrameMode, PassProfiler};
 use crate::scene_upload::{GpuLight, GpuScene, gpu_light};
@@ -85,6 +86,8 @@ pub struct Renderer {
     frame_schema: BindGroupSchema,
     frame_bind: wgpu::BindGroup,
     fill_counts: wgpu::Buffer,
+    /// The fill counts' bytes in the memory ledger (textures hold their own).
+    _fill_counts_memory: Reservation,
     bytes: u64,
 }
 
@@ -135,7 +138,7 @@ impl DirectLighting {
                     _ => options.shadow_resolution,
                 };
                 let view = LightView::fit(light, &bounds, res);
-                let shadow = gbuffer_pass.shadow_map(device, &view)?;
+                let shadow = gbuffer_pass.shadow_map(ctx, &view)?;
                 let uniform = direct_uniform(light, &view);
                 let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                     label: Some("direct light"),
@@ -244,7 +247,9 @@ impl Renderer {
             h,
             raise,
         )?;
-        ctx.limits.memory(
+        // Summed with what is held already (the scene's buffers); each target reserves
+        // its own bytes as it is made.
+        ctx.memory.check(
             &format!(
                 "the camera-sized targets of {w}x{h} (radiance, G-buffer, depth, fill counts)"
             ),
@@ -252,9 +257,9 @@ impl Renderer {
             raise,
         )?;
         let gbuffer_pass = GBufferPass::new(ctx)?;
-        let camera_gbuffer = gbuffer_pass.camera_gbuffer(device, cam, near, far)?;
+        let camera_gbuffer = gbuffer_pass.camera_gbuffer(ctx, cam, near, far)?;
         let (camera_view, camera_projection) = (cam.view(), cam.projection(near, far));
-        let targets = RadianceTargets::new(device, w, h);
+        let targets = RadianceTargets::new(ctx, w, h)?;
 
         // Group 0 of method passes, reflected from frame.wgsl; visible to every stage
         // of every method pass (vertex stages may not write storage).
@@ -290,9 +295,13 @@ impl Renderer {
             contents: bytemuck::bytes_of(&frame_uniforms),
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         });
+        let fill_counts_bytes = (w as u64 * h as u64 * 4).max(4);
+        let fill_counts_memory = ctx
+            .memory
+            .reserve("fill counts", fill_counts_bytes, raise)?;
         let fill_counts = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("fill counts"),
-            size: (w as u64 * h as u64 * 4).max(4),
+            size: fill_counts_bytes,
             usage: wgpu::BufferUsages::STORAGE
                 | wgpu::BufferUsages::COPY_SRC
                 | wgpu::BufferUsages::COPY_DST,
@@ -328,6 +337,7 @@ impl Renderer {
             targets,
             frame_uniforms,
             frame_buffer,
+            _fill_counts_memory: fill_counts_memory,
             camera_view,
             camera_projection,
             frame_schema,

@@ -7,6 +7,7 @@ use bytemuck::{Pod, Zeroable};
 use caustics_scene::{Light, Material, Scene, Shape, Tessellation, TriangleMesh};
 use wgpu::util::DeviceExt;
 
+use crate::limits::Reservation;
 use crate::triangle_bvh::SceneTriangles;
 use crate::{GpuContext, GpuError};
 
@@ -167,6 +168,8 @@ pub struct GpuScene {
     /// Bytes of GPU memory the upload owns (the triangle BVH not included: the method
     /// that asks for it counts it).
     pub bytes: u64,
+    /// The vertex and index buffers' bytes in the memory ledger (the tables are small).
+    _memory: [Reservation; 2],
     /// Meshes and heightfields in one BVH, built on first use.
     triangle_bvh: OnceLock<SceneTriangles>,
 }
@@ -342,6 +345,20 @@ impl GpuScene {
             .map(|m| gpu_material(&m.material))
             .collect();
         let lights: Vec<GpuLight> = scene.lights.iter().map(gpu_light).collect();
+        // Both are bound whole as storage by the passes that trace the scene.
+        let raise = "use meshes of fewer triangles (--max-scene-triangles bounds them when the scene loads)";
+        let memory = [
+            ctx.reserve_storage(
+                &format!("the scene's vertex buffer ({} vertices)", vertices.len()),
+                std::mem::size_of_val(vertices.as_slice()) as u64,
+                raise,
+            )?,
+            ctx.reserve_storage(
+                &format!("the scene's index buffer ({} triangles)", indices.len() / 3),
+                std::mem::size_of_val(indices.as_slice()) as u64,
+                raise,
+            )?,
+        ];
         let storage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
         let mk = |label: &str, contents: &[u8], usage| {
             device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -388,6 +405,7 @@ impl GpuScene {
             lights_buffer,
             waves_buffer,
             bytes,
+            _memory: memory,
             triangle_bvh: OnceLock::new(),
         })
     }

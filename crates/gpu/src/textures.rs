@@ -1,5 +1,8 @@
 //! Render targets shared by the base passes and the methods.
 
+use crate::limits::Reservation;
+use crate::{GpuContext, GpuError};
+
 /// Format of every HDR radiance target (direct, surface caustic, volume caustic).
 /// 32-bit float with additive blending (`FLOAT32_BLENDABLE`), linear W·m⁻²·sr⁻¹.
 pub const HDR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
@@ -73,20 +76,50 @@ pub struct Target {
     pub layer_views: Vec<wgpu::TextureView>,
     /// Bytes of GPU memory.
     pub bytes: u64,
+    /// Those bytes, held in the device's memory ledger while the texture lives.
+    _memory: Reservation,
 }
 
 impl Target {
-    /// Creates a 2D (array) texture usable as attachment, binding and copy source.
+    /// Bytes of a `width` × `height` × `layers` texture of `format`.
+    pub fn bytes_of(format: wgpu::TextureFormat, width: u32, height: u32, layers: u32) -> u64 {
+        let bpp = format.block_copy_size(None).unwrap_or(4) as u64;
+        u64::from(width) * u64::from(height) * u64::from(layers) * bpp
+    }
+
+    /// Creates a 2D (array) texture usable as attachment, binding and copy source,
+    /// after checking its side against the device and reserving its bytes in the
+    /// memory ledger (what sizes it from a user's request checks first, with the
+    /// parameter to lower; this is the backstop every texture passes).
     pub fn new(
-        device: &wgpu::Device,
+        ctx: &GpuContext,
         label: &str,
         format: wgpu::TextureFormat,
         width: u32,
         height: u32,
         layers: u32,
         extra_usage: wgpu::TextureUsages,
-    ) -> Self {
-        let texture = device.create_texture(&wgpu::TextureDescriptor {
+    ) -> Result<Self, GpuError> {
+        let raise = "lower the resolution or parameter that sizes it";
+        ctx.limits.texture(label, width, height, raise)?;
+        if layers > ctx.device.limits().max_texture_array_layers {
+            return Err(GpuError::OverLimit {
+                what: label.to_owned(),
+                needed: format!("{layers} layers"),
+                limit: format!(
+                    "this device's largest texture array, {} layers (max_texture_array_layers)",
+                    ctx.device.limits().max_texture_array_layers
+                ),
+                raise: raise.to_owned(),
+            });
+        }
+        let bytes = Self::bytes_of(format, width, height, layers);
+        let memory = ctx.memory.reserve(
+            &format!("{label} ({width}x{height}x{layers})"),
+            bytes,
+            raise,
+        )?;
+        let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
             label: Some(label),
             size: wgpu::Extent3d {
                 width,
@@ -124,14 +157,13 @@ impl Target {
                 })
             })
             .collect();
-        let bpp = format.block_copy_size(None).unwrap_or(4) as u64;
-        let bytes = width as u64 * height as u64 * layers as u64 * bpp;
-        Self {
+        Ok(Self {
             texture,
             view,
             layer_views,
             bytes,
-        }
+            _memory: memory,
+        })
     }
 
     /// View of the texture as a D2 array (for shadow-map sampling), whatever its layer count.
@@ -155,37 +187,37 @@ pub struct RadianceTargets {
 
 impl RadianceTargets {
     /// Allocates the three targets at the camera resolution.
-    pub fn new(device: &wgpu::Device, width: u32, height: u32) -> Self {
+    pub fn new(ctx: &GpuContext, width: u32, height: u32) -> Result<Self, GpuError> {
         let storage = wgpu::TextureUsages::STORAGE_BINDING;
-        Self {
+        Ok(Self {
             direct: Target::new(
-                device,
+                ctx,
                 "direct radiance",
                 HDR_FORMAT,
                 width,
                 height,
                 1,
                 storage,
-            ),
+            )?,
             surface: Target::new(
-                device,
+                ctx,
                 "surface caustic radiance",
                 HDR_FORMAT,
                 width,
                 height,
                 1,
                 storage,
-            ),
+            )?,
             volume: Target::new(
-                device,
+                ctx,
                 "volume caustic radiance",
                 HDR_FORMAT,
                 width,
                 height,
                 1,
                 storage,
-            ),
-        }
+            )?,
+        })
     }
 
     /// Bytes of GPU memory the targets own.

@@ -243,6 +243,8 @@ pub struct SceneTriangles {
     pub depth: u32,
     /// Bytes of GPU memory the two buffers own.
     pub bytes: u64,
+    /// Those bytes in the memory ledger.
+    _memory: [crate::limits::Reservation; 2],
 }
 
 impl SceneTriangles {
@@ -267,6 +269,22 @@ impl SceneTriangles {
         } else {
             0
         };
+        let raise = "use meshes of fewer triangles (--max-scene-triangles bounds them when the scene loads)";
+        let memory = [
+            ctx.reserve_storage(
+                &format!("the scene's triangle BVH nodes ({})", flat.nodes.len()),
+                std::mem::size_of_val(flat.nodes.as_slice()) as u64,
+                raise,
+            )?,
+            ctx.reserve_storage(
+                &format!(
+                    "the scene's triangle BVH triangles ({})",
+                    flat.triangles.len()
+                ),
+                std::mem::size_of_val(flat.triangles.as_slice()) as u64,
+                raise,
+            )?,
+        ];
         let mk = |label: &str, contents: &[u8]| {
             ctx.device
                 .create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -287,6 +305,7 @@ impl SceneTriangles {
             triangles,
             triangle_count,
             depth: flat.depth,
+            _memory: memory,
         })
     }
 

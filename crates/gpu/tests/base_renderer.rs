@@ -122,7 +122,7 @@ fn point_light_cube_gbuffer_sees_the_first_surface_along_each_texel_ray() {
     // and record it into a frame.
     let gb = renderer
         .gbuffer_pass()
-        .light_gbuffer(&ctx.device, view)
+        .light_gbuffer(&ctx, view)
         .expect("light gbuffer");
     let mut profiler = PassProfiler::new(&ctx, 1);
     let mut frame = renderer

@@ -62,8 +62,8 @@ fn trace_in(
     let renderer = Renderer::new(&ctx, gpu_scene, RendererOptions::default()).expect("renderer");
     let pass = ImpostorPass::new(&ctx).expect("impostor pass");
     let impostor = match center {
-        Some(c) => pass.impostor_around(&ctx.device, renderer.scene(), objects, c, 256),
-        None => pass.impostor(&ctx.device, renderer.scene(), objects, 256),
+        Some(c) => pass.impostor_around(&ctx, renderer.scene(), objects, c, 256),
+        None => pass.impostor(&ctx, renderer.scene(), objects, 256),
     }
     .expect("impostor");
 

@@ -65,16 +65,37 @@ impl CausticMap {
         let far = reach * 1.01 + 1e-3;
         let near = (far * 1e-5).max(1e-5);
         let faces: [Mat4; 6] = std::array::from_fn(|f| face_view_proj(f, center, near, far));
+        // The atlas is sized by a parameter: refused naming it, before it is made.
+        let what = format!(
+            "cube_size: the caustic cube map atlas ({}x{} texels)",
+            3 * size,
+            2 * size
+        );
+        let raise = "lower cube_size";
+        let param = |e: GpuError| MethodError::Param {
+            method,
+            message: e.to_string(),
+        };
+        ctx.limits
+            .texture(&what, 3 * size, 2 * size, raise)
+            .map_err(param)?;
+        ctx.memory
+            .check(
+                &what,
+                Target::bytes_of(HDR_FORMAT, 3 * size, 2 * size, 1),
+                raise,
+            )
+            .map_err(param)?;
         let (atlas, uniform) = ctx.checked("caustic cube map setup", || {
             let atlas = Target::new(
-                device,
+                ctx,
                 "caustic cube map",
                 HDR_FORMAT,
                 3 * size,
                 2 * size,
                 1,
                 wgpu::TextureUsages::empty(),
-            );
+            )?;
             let uniform = uniform_buffer(
                 device,
                 "caustic cube map",
@@ -89,8 +110,8 @@ impl CausticMap {
                     ],
                 },
             );
-            (atlas, uniform)
-        })?;
+            Ok::<_, GpuError>((atlas, uniform))
+        })??;
         let lookup = lookup_pass(ctx, renderer, method, &uniform, &atlas)?;
         Ok(Self {
             bytes: atlas.bytes + uniform.size(),

@@ -61,6 +61,7 @@ pub use cube_map::{CausticMap, face_origin};
 use bytemuck::{Pod, Zeroable};
 use caustics_gpu::buffers::{storage_buffer, uniform_buffer};
 use caustics_gpu::impostor::{DistanceImpostor, IMPOSTOR_TRACE_WGSL, ImpostorPass, objects_bounds};
+use caustics_gpu::limits::Reservation;
 use caustics_gpu::pass::{ComputePass, Shader};
 use caustics_gpu::wgpu;
 use caustics_gpu::{
@@ -350,9 +351,8 @@ impl DistanceMaps {
         size: u32,
     ) -> Result<Self, GpuError> {
         let pass = ImpostorPass::new(ctx)?;
-        let around = |objects: &[usize]| {
-            pass.impostor_around(&ctx.device, gpu_scene, objects, g.center, size)
-        };
+        let around =
+            |objects: &[usize]| pass.impostor_around(ctx, gpu_scene, objects, g.center, size);
         let generator = match g.kind {
             GeneratorKind::OpenRefractor => None,
             _ => Some(around(&[g.index])?),
@@ -412,6 +412,8 @@ pub struct PhotonHits {
     /// The texel size of the light view (m, or tan units for perspective faces).
     pub texel_size: f32,
     bytes: u64,
+    /// The hit images' bytes in the device's memory ledger (the textures hold theirs).
+    _hits_memory: Reservation,
 }
 
 impl PhotonHits {
@@ -483,16 +485,34 @@ impl PhotonHits {
             "resolution: the photon hit images ({faces} face(s) x {sheet_count} sheet(s) x {r}x{r} hits of {HIT_BYTES} bytes)",
             r = config.resolution
         );
-        ctx.limits
-            .storage(&what, texels * HIT_BYTES, &raise)
+        let hits_memory = ctx
+            .reserve_storage(&what, texels * HIT_BYTES, &raise)
             .map_err(limit)?;
+        // The light G-buffer (resolution² a face) and the distance maps
+        // (distance_map_size² a face) are textures: their sides are checked here, naming
+        // the parameter; their bytes are reserved as they are made.
+        let r = config.resolution;
         ctx.limits
-            .memory(&what, texels * HIT_BYTES, &raise)
+            .texture(
+                &format!("resolution: the light G-buffer ({r}x{r} a face)"),
+                r,
+                r,
+                "lower resolution",
+            )
+            .map_err(limit)?;
+        let d = config.distance_map_size;
+        ctx.limits
+            .texture(
+                &format!("distance_map_size: the distance maps ({d}x{d} a face)"),
+                d,
+                d,
+                "lower distance_map_size",
+            )
             .map_err(limit)?;
         let (light_gbuffer, maps, uniform, hits, counters) =
             ctx.checked("photon hits setup", || -> Result<_, GpuError> {
                 // §4.1: the first surface the light meets in each texel of its view.
-                let light_gbuffer = renderer.gbuffer_pass().light_gbuffer(device, &view)?;
+                let light_gbuffer = renderer.gbuffer_pass().light_gbuffer(ctx, &view)?;
                 // §3: where a refracted ray leaves the generator and lands on a receiver.
                 let maps = DistanceMaps::new(ctx, gpu_scene, &g, config.distance_map_size)?;
                 let faces = light_gbuffer.layers();
@@ -580,6 +600,7 @@ impl PhotonHits {
             light,
             texel_size: view.texel_size,
             bytes,
+            _hits_memory: hits_memory,
         })
     }
 

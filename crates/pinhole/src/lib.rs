@@ -65,6 +65,7 @@ pub mod light_map;
 pub mod sampling;
 
 use bytemuck::{Pod, Zeroable};
+use caustics_gpu::limits::Reservation;
 use caustics_gpu::pass::{ComputePass, RasterPass, Shader};
 use caustics_gpu::textures::{additive_hdr_target, load_attachment};
 use caustics_gpu::wgpu::{self, util::DeviceExt};
@@ -384,6 +385,9 @@ pub struct Pinhole {
     batches: u32,
     receiver_pixels_hint: u64,
     bytes: u64,
+    /// The light map and the sample buffers, held in the device's memory ledger while
+    /// the passes' bind groups use them.
+    _memory: (LightMap, Reservation),
 }
 
 /// The GPU form of the samples, with ε and the finite-difference step filled in.
@@ -537,6 +541,17 @@ impl Pinhole {
         let sample_count = samples.len() as u32;
         let gpu_params = gpu_params(params, generator as u32, mode.code(), sample_count, &disc);
         let bvh = gpu_scene.triangle_bvh(ctx)?;
+        // The samples (80 bytes each) and the light each sees (16 bytes), bound whole.
+        let samples_memory = ctx
+            .reserve_storage(
+                &format!("samples: the sample buffers ({sample_count} x 96 bytes)"),
+                u64::from(sample_count) * 96,
+                "lower samples",
+            )
+            .map_err(|e| MethodError::Param {
+                method: NAME,
+                message: e.to_string(),
+            })?;
         let (buffers, map) = ctx.checked("pinhole setup", || {
             let buffers = Buffers::new(
                 &ctx.device,
@@ -544,8 +559,11 @@ impl Pinhole {
                 &gpu_samples(&samples, params.epsilon_scale as f32),
             );
             // The light's map (the +Z face of its cube map) with its mip chain.
-            (buffers, LightMap::new(ctx, params.cube_size, disc.alpha))
-        })?;
+            Ok::<_, caustics_gpu::GpuError>((
+                buffers,
+                LightMap::new(ctx, params.cube_size, disc.alpha)?,
+            ))
+        })??;
 
         let bvh_bindings: [(&str, &dyn caustics_gpu::pass::Bindable); 2] =
             [("bvh_nodes", &bvh.nodes), ("bvh_triangles", &bvh.triangles)];
@@ -591,6 +609,7 @@ impl Pinhole {
             prepare,
             gather,
             bytes: buffers.bytes() + map.bytes,
+            _memory: (map, samples_memory),
             counters: buffers.counters,
             sample_count,
             batches: sample_count.div_ceil(params.samples_per_pass),

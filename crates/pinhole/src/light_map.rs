@@ -17,8 +17,9 @@
 //! The bench's lights do not move, so the map is built once per scene; the paper
 //! re-renders it per frame, which costs little next to the gather.
 
-use caustics_gpu::GpuContext;
+use caustics_gpu::limits::Reservation;
 use caustics_gpu::wgpu;
+use caustics_gpu::{GpuContext, GpuError};
 
 /// The map on the GPU: a `size`² R16Float texture with its mip chain, and the
 /// trilinear sampler the gather's footprint filter reads it with.
@@ -29,12 +30,22 @@ pub struct LightMap {
     pub sampler: wgpu::Sampler,
     /// Bytes of the texture.
     pub bytes: u64,
+    /// Those bytes in the device's memory ledger.
+    _memory: Reservation,
 }
 
 impl LightMap {
     /// Builds the coverage of a cone of half angle `alpha` ([`coverage_mips`]) and
-    /// uploads it.
-    pub fn new(ctx: &GpuContext, size: u32, alpha: f32) -> Self {
+    /// uploads it, after checking its side against the device and reserving its bytes.
+    pub fn new(ctx: &GpuContext, size: u32, alpha: f32) -> Result<Self, GpuError> {
+        let what = format!("cube_size: the pinhole light map ({size}x{size}, R16Float with mips)");
+        ctx.limits.texture(&what, size, size, "lower cube_size")?;
+        // A full mip chain adds a third to level 0's 2 bytes a texel.
+        let memory = ctx.memory.reserve(
+            &what,
+            (u64::from(size) * u64::from(size) * 2 * 4).div_ceil(3),
+            "lower cube_size",
+        )?;
         let levels = coverage_mips(size, alpha);
         let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
             label: Some("pinhole light map"),
@@ -78,7 +89,7 @@ impl LightMap {
                 },
             );
         }
-        Self {
+        Ok(Self {
             view: texture.create_view(&wgpu::TextureViewDescriptor::default()),
             sampler: ctx.device.create_sampler(&wgpu::SamplerDescriptor {
                 label: Some("pinhole light map"),
@@ -88,7 +99,8 @@ impl LightMap {
                 ..Default::default()
             }),
             bytes,
-        }
+            _memory: memory,
+        })
     }
 }
 

@@ -83,6 +83,11 @@ impl Sparse {
         }
     }
 
+    /// Bytes of the stored tiles.
+    fn stored_bytes(&self) -> u64 {
+        (self.data.len() * std::mem::size_of::<f64>()) as u64
+    }
+
     /// The sums of tile `t`, if stored.
     #[inline]
     fn tile(&self, t: usize) -> Option<&[f64]> {
@@ -121,6 +126,11 @@ impl Batched {
             sums: (0..batches).map(|_| Sparse::new(pixels)).collect(),
             pixels,
         }
+    }
+
+    /// Bytes of the tiles stored over all batches (what grows as the caustic spreads).
+    fn stored_bytes(&self) -> u64 {
+        self.sums.iter().map(Sparse::stored_bytes).sum()
     }
 
     /// Adds the splats chosen by `pick` of `outs` (units `first`, `first` + 1, …).
@@ -216,6 +226,23 @@ pub(crate) struct Accumulator {
 }
 
 impl Accumulator {
+    /// Bytes held whatever the photons do, for `pixels` pixels: the per-batch tile
+    /// indices, the dense direct sums, and the finished mean and standard-error images
+    /// (`f32` RGB each) of every kind.
+    pub(crate) fn fixed_bytes(batches: u32, pixels: usize, volume: bool, direct: bool) -> u64 {
+        let pixels = pixels as u64;
+        let kinds = 1 + u64::from(volume);
+        let tile_index = u64::from(batches) * pixels.div_ceil(TILE as u64) * 4;
+        let finished = 2 * 12 * pixels;
+        kinds * (tile_index + finished) + u64::from(direct) * (24 + 12) * pixels
+    }
+
+    /// Bytes of the batch tiles stored so far (they grow with the caustic's area, up to
+    /// 24 bytes a pixel per batch and kind).
+    pub(crate) fn stored_bytes(&self) -> u64 {
+        self.surface.stored_bytes() + self.volume.as_ref().map_or(0, Batched::stored_bytes)
+    }
+
     pub(crate) fn new(batches: u32, pixels: usize, volume: bool, direct: bool) -> Accumulator {
         Accumulator {
             surface: Batched::new(batches, pixels),

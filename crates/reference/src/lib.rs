@@ -78,6 +78,38 @@ pub use eps::EPSILON_POLICY;
 /// Most batches accepted (each holds up to a full-resolution `f64` image in memory).
 pub const MAX_BATCHES: u32 = 1024;
 
+/// Environment variable that sets the reference's memory budget, in MiB (read by the
+/// harness with [`memory_budget_from_env`]).
+pub const MEMORY_BUDGET_ENV: &str = "CAUSTICS_CPU_MEMORY_MIB";
+
+/// Memory budget where the machine's memory cannot be read: 8 GiB.
+pub const FALLBACK_MEMORY_BUDGET_BYTES: u64 = 8 << 30;
+
+/// The default memory budget of a render: three quarters of the machine's physical
+/// memory (`MemTotal` of `/proc/meminfo`; the rest is left to the system and the GPU
+/// driver), else [`FALLBACK_MEMORY_BUDGET_BYTES`].
+pub fn default_memory_budget() -> u64 {
+    std::fs::read_to_string("/proc/meminfo")
+        .ok()
+        .and_then(|text| {
+            let line = text.lines().find(|l| l.starts_with("MemTotal:"))?;
+            let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+            Some(kib.saturating_mul(1024) / 4 * 3)
+        })
+        .filter(|&b| b > 0)
+        .unwrap_or(FALLBACK_MEMORY_BUDGET_BYTES)
+}
+
+/// The memory budget [`MEMORY_BUDGET_ENV`] sets (MiB), else [`default_memory_budget`].
+pub fn memory_budget_from_env() -> Result<u64, ReferenceError> {
+    match std::env::var(MEMORY_BUDGET_ENV) {
+        Err(_) => Ok(default_memory_budget()),
+        Ok(text) => {
+            caustics_scene::parse_mib(&text).ok_or(ReferenceError::BadMemoryBudget { text })
+        }
+    }
+}
+
 /// Errors of the reference renderer.
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum ReferenceError {
@@ -95,6 +127,29 @@ pub enum ReferenceError {
     BadSeconds {
         /// The value given.
         seconds: f64,
+    },
+    /// [`MEMORY_BUDGET_ENV`] is not a whole number of MiB.
+    #[error("{MEMORY_BUDGET_ENV}={text:?}: expected a whole number of MiB from 1 to {}", u64::MAX >> 20)]
+    BadMemoryBudget {
+        /// The value given.
+        text: String,
+    },
+    /// The render would need more memory than its budget: refused before the images
+    /// are allocated, or stopped when the batch sums outgrow it.
+    #[error(
+        "{what}: {needed} needed, past the reference's memory budget, {budget} (set {MEMORY_BUDGET_ENV} in MiB to change it); {raise}",
+        needed = caustics_scene::format_bytes(*needed),
+        budget = caustics_scene::format_bytes(*budget)
+    )]
+    OverMemoryBudget {
+        /// What needs it.
+        what: String,
+        /// Bytes needed.
+        needed: u64,
+        /// The budget, bytes.
+        budget: u64,
+        /// How to stay within it.
+        raise: &'static str,
     },
     /// The scene holds something the reference cannot render.
     #[error("unsupported scene content: {0}")]
@@ -184,6 +239,8 @@ pub struct ReferenceResult {
 
 /// A scene prepared for light tracing: geometry with its BVH, emitters, camera.
 pub struct Reference {
+    /// What a render's images and batch sums may hold, bytes.
+    memory_budget_bytes: u64,
     geometry: Geometry,
     materials: Vec<Material>,
     medium: Option<Medium>,
@@ -203,6 +260,7 @@ impl Reference {
         }
         check_range(scene)?;
         Ok(Reference {
+            memory_budget_bytes: default_memory_budget(),
             geometry: Geometry::new(scene),
             materials: scene
                 .objects
@@ -216,6 +274,13 @@ impl Reference {
         })
     }
 
+    /// The same, with renders bounded by `bytes` of memory for their images and batch
+    /// sums (default [`default_memory_budget`]).
+    pub fn with_memory_budget(mut self, bytes: u64) -> Self {
+        self.memory_budget_bytes = bytes;
+        self
+    }
+
     /// Traces `opts.photons` photons (rounded up to whole work units; the exact count
     /// is in the result), calling `progress(photons_done)` from time to time.
     pub fn render(
@@ -225,7 +290,7 @@ impl Reference {
     ) -> Result<ReferenceResult, ReferenceError> {
         check(opts)?;
         let plan = Plan::for_photons(opts.photons, opts.batches);
-        Ok(self.run(plan, None, opts, progress, None, true).0)
+        Ok(self.run(plan, None, opts, progress, None, true)?.0)
     }
 
     /// Traces until `seconds` have passed (whole rounds: one unit more in every
@@ -249,7 +314,7 @@ impl Reference {
             rounds: u64::MAX,
             batches: opts.batches,
         };
-        Ok(self.run(plan, Some(seconds), opts, progress, None, true).0)
+        Ok(self.run(plan, Some(seconds), opts, progress, None, true)?.0)
     }
 
     /// Test hook: the mean power (W, RGB) per traced sample of the caustic photons
@@ -268,7 +333,7 @@ impl Reference {
             direct: false,
             ..opts.clone()
         };
-        Ok(self.run(plan, None, &opts, &|_| {}, Some(filter), false).1)
+        Ok(self.run(plan, None, &opts, &|_| {}, Some(filter), false)?.1)
     }
 
     fn run(
@@ -279,7 +344,7 @@ impl Reference {
         progress: &(dyn Fn(u64) + Sync),
         power_filter: Option<PowerFilter<'_>>,
         connect: bool,
-    ) -> (ReferenceResult, [f64; 3]) {
+    ) -> Result<(ReferenceResult, [f64; 3]), ReferenceError> {
         let start = Instant::now();
         let tracer = Tracer {
             geometry: &self.geometry,
@@ -292,7 +357,27 @@ impl Reference {
             connect,
         };
         let pixels = if connect { self.sensor.pixels() } else { 0 };
-        let mut acc = Accumulator::new(plan.batches, pixels, self.medium.is_some(), opts.direct);
+        let volume = self.medium.is_some();
+        // Refused before anything image-sized is allocated; the batch sums, which grow
+        // with the caustic's area, are checked as they grow.
+        let fixed = Accumulator::fixed_bytes(plan.batches, pixels, volume, opts.direct);
+        let raise = "lower camera.width and camera.height, or --batches";
+        if fixed > self.memory_budget_bytes {
+            return Err(ReferenceError::OverMemoryBudget {
+                what: format!(
+                    "the images of a {}x{} render ({} batches{}{})",
+                    self.sensor.width,
+                    self.sensor.height,
+                    plan.batches,
+                    if volume { ", volume" } else { "" },
+                    if opts.direct { ", direct" } else { "" }
+                ),
+                needed: fixed,
+                budget: self.memory_budget_bytes,
+                raise,
+            });
+        }
+        let mut acc = Accumulator::new(plan.batches, pixels, volume, opts.direct);
         let b = plan.batches as u64;
         // Rounds per group: enough units to keep every thread busy.
         let group = (2 * rayon::current_num_threads() as u64).div_ceil(b).max(1);
@@ -307,6 +392,19 @@ impl Reference {
                 .enumerate()
                 .for_each(|(i, out)| tracer.run_unit(opts.seed, first + i as u64, plan.unit, out));
             acc.add(first, &outs);
+            let held = fixed + acc.stored_bytes();
+            if held > self.memory_budget_bytes {
+                return Err(ReferenceError::OverMemoryBudget {
+                    what: format!(
+                        "the batch sums of {} batches after {} photons (each batch stores the pixels its photons reached)",
+                        plan.batches,
+                        (rounds + n) * b * plan.unit as u64
+                    ),
+                    needed: held,
+                    budget: self.memory_budget_bytes,
+                    raise,
+                });
+            }
             rounds += n;
             progress(rounds * b * plan.unit as u64);
             if seconds.is_some_and(|s| start.elapsed().as_secs_f64() >= s) {
@@ -337,7 +435,7 @@ impl Reference {
             )
         });
         let power = acc.power.map(|p| p / n);
-        (
+        Ok((
             ReferenceResult {
                 caustic: image(caustic),
                 caustic_stderr: image(caustic_stderr),
@@ -348,7 +446,7 @@ impl Reference {
                 seconds: start.elapsed().as_secs_f64(),
             },
             power,
-        )
+        ))
     }
 }
 

@@ -56,7 +56,7 @@ pub use glam::{Mat3, Mat4, Vec2, Vec3, Vec4};
 pub use camera::Camera;
 pub use error::SceneError;
 pub use light::{Light, Material, Medium, NamedMaterial};
-pub use limits::{Limits, MAX_COORDINATE};
+pub use limits::{Limits, MAX_COORDINATE, format_bytes, parse_mib};
 pub use mesh::{MeshError, MeshTransform, smooth_normals};
 pub use shape::{Aabb, Heightfield, Mesh, Shape, Wave, perpendicular_frame, quad_axes};
 pub use tessellate::{Tessellation, TriangleMesh};

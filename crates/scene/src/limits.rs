@@ -52,3 +52,54 @@ impl Default for Limits {
         }
     }
 }
+
+/// A memory budget given in an environment variable as a whole number of MiB (the
+/// GPU's and the CPU reference's budgets are read this way): `None` where the text is
+/// not a positive whole number or overflows bytes.
+pub fn parse_mib(text: &str) -> Option<u64> {
+    let mib: u64 = text.trim().parse().ok()?;
+    (mib > 0).then(|| mib.checked_mul(1 << 20)).flatten()
+}
+
+/// `bytes` as a reader wants it: "1.06 GiB (1,140,850,688 bytes)".
+pub fn format_bytes(bytes: u64) -> String {
+    const UNITS: [&str; 4] = ["KiB", "MiB", "GiB", "TiB"];
+    let mut grouped = String::new();
+    for (i, c) in bytes.to_string().chars().rev().enumerate() {
+        if i > 0 && i % 3 == 0 {
+            grouped.push(',');
+        }
+        grouped.push(c);
+    }
+    let grouped: String = grouped.chars().rev().collect();
+    let mut value = bytes as f64;
+    let mut unit = None;
+    for u in UNITS {
+        if value < 1024.0 {
+            break;
+        }
+        value /= 1024.0;
+        unit = Some(u);
+    }
+    match unit {
+        None => format!("{grouped} bytes"),
+        Some(u) => format!("{value:.2} {u} ({grouped} bytes)"),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn budgets_are_whole_mib_and_bytes_read_as_people_write_them() {
+        assert_eq!(parse_mib("512"), Some(512 << 20));
+        assert_eq!(parse_mib(" 1 "), Some(1 << 20));
+        for bad in ["0", "-1", "1.5", "", "lots", "18446744073709551615"] {
+            assert_eq!(parse_mib(bad), None, "{bad:?}");
+        }
+        assert_eq!(format_bytes(999), "999 bytes");
+        assert_eq!(format_bytes(1536), "1.50 KiB (1,536 bytes)");
+        assert_eq!(format_bytes(3 << 30), "3.00 GiB (3,221,225,472 bytes)");
+    }
+}

@@ -4,13 +4,16 @@
 //! bounded time, and every error must name the scene file (and the mesh file, for a
 //! mesh error) with a non-empty reason.
 //!
-//! The generator is SplitMix64 written out here (the seeding generator of xoshiro),
-//! rather than `rand_xoshiro` or `proptest`: the mutations need only a seeded stream of
-//! integers, and a new dev-dependency would change the workspace's Cargo.lock.
+//! The generator is SplitMix64 (`common/split_mix.rs`, shared with the harness's parser
+//! fuzz test), rather than `rand_xoshiro` or `proptest`: the mutations need only a
+//! seeded stream of integers, and a new dev-dependency would change the workspace's
+//! Cargo.lock.
 //! Run with `cargo test -p caustics-scene --test fuzz_loaders -- --nocapture` to see
 //! the counts; `FUZZ_SEED=<n>` picks another seed (default 18).
 
 mod common;
+#[path = "common/split_mix.rs"]
+mod split_mix;
 
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::Path;
@@ -19,27 +22,10 @@ use std::time::{Duration, Instant};
 use caustics_scene::{Scene, SceneError, builtin_dir};
 use common::*;
 use serde_json::{Value, json};
+use split_mix::{SplitMix, env_or};
 
 /// The longest one load may take (debug build, 2 busy cores; loads take milliseconds).
 const MAX_LOAD: Duration = Duration::from_secs(5);
-
-struct SplitMix(u64);
-
-impl SplitMix {
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n.max(1) as u64) as usize
-    }
-    fn pick<'a, T>(&mut self, xs: &'a [T]) -> &'a T {
-        &xs[self.below(xs.len())]
-    }
-}
 
 /// Numbers that break things: NaN, infinities, huge, negative zero, huge indices.
 const NUMBERS: &[&str] = &[
@@ -417,10 +403,7 @@ impl Tally {
 
 #[test]
 fn mutated_meshes_and_scenes_never_panic_and_say_what_is_wrong() {
-    let seed = std::env::var("FUZZ_SEED")
-        .ok()
-        .and_then(|s| s.parse().ok())
-        .unwrap_or(18);
+    let seed = env_or("FUZZ_SEED", 18);
     let mut rng = SplitMix(seed);
     let dir = tempfile::tempdir().expect("tempdir");
     let d = dir.path();

@@ -39,6 +39,7 @@
 mod sources;
 
 use bytemuck::{Pod, Zeroable};
+use caustics_gpu::limits::Reservation;
 use caustics_gpu::pass::{BindGroupSchema, ComputePass, RasterPass, Shader};
 use caustics_gpu::textures::{additive_hdr_target, load_attachment};
 use caustics_gpu::wgpu::{self, util::DeviceExt};
@@ -279,6 +280,8 @@ pub struct Wavefront {
     counters_init: wgpu::Buffer,
     bvh_triangles: u32,
     bytes: u64,
+    /// The lattices' and sheets' bytes in the device's memory ledger.
+    _memory: Vec<Reservation>,
 }
 
 impl Wavefront {
@@ -366,6 +369,7 @@ impl Wavefront {
         };
         let mut sheets = Vec::new();
         let mut lattice_bytes = 0;
+        let mut memory = Vec::new();
         for (light_index, light) in scene.lights.iter().enumerate() {
             for &generator in &generators {
                 let object = &scene.objects[generator];
@@ -399,14 +403,17 @@ impl Wavefront {
                 ctx.limits
                     .storage(&what, source_count * 64, raise)
                     .map_err(limit)?;
-                ctx.limits
-                    .memory(
-                        &what,
-                        lattice_bytes_needed
-                            + masks.len() as u64 * (source_count * 64 + triangle_count * 4),
-                        raise,
-                    )
-                    .map_err(limit)?;
+                // Held (summed with every live resource) while the wavefront lives.
+                memory.push(
+                    ctx.memory
+                        .reserve(
+                            &what,
+                            lattice_bytes_needed
+                                + masks.len() as u64 * (source_count * 64 + triangle_count * 4),
+                            raise,
+                        )
+                        .map_err(limit)?,
+                );
                 // One upload of the lattice per (light, generator); its sheets share it.
                 let (sources, triangles) = ctx.checked("wavefront lattice", || {
                     let init = |label: &str, contents: &[u8]| {
@@ -469,6 +476,7 @@ impl Wavefront {
             counters_init,
             bvh_triangles: bvh.triangle_count,
             bytes,
+            _memory: memory,
         })
     }
 }
