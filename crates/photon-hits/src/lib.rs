@@ -53,6 +53,16 @@
 //! sheet 0 with path ids of their own. An open refractor (water) has no inside to
 //! reflect in; `bounces` does not apply to it. Light leaving a closed refractor that
 //! meets the generator again outside (a concave mesh) is not refracted again.
+//!
+//! **Silhouettes.** The paper's hit image stops at the last texel whose centre sees the
+//! generator: the light through the part of the next texel that still meets it is
+//! dropped, and a reconstruction ends a texel short of the silhouette's landing. Where
+//! the reflection turns fast near an edge (the ring's rim) that last row spreads over
+//! tens of centimetres of floor, a dark scalloped wedge. With
+//! [`PhotonHitConfig::silhouette_hits`] each texel beside the generator is traced from
+//! the generator's exact edge, found by bisecting its ray towards a neighbour that meets
+//! it against the scene's BVH and analytic shapes ([`caustics_gpu::triangle_bvh`]),
+//! and carries the share of its light on the generator's side (`photon_hits_silhouette`).
 
 mod cube_map;
 
@@ -87,6 +97,21 @@ pub const SPLAT_KERNEL_WGSL: &str = include_str!("splat_kernel.wgsl");
 pub fn compose(pass: &str) -> String {
     shader::compose_method(&format!("{IMPOSTOR_TRACE_WGSL}\n{TYPES_WGSL}\n{pass}"))
 }
+
+/// Group of the tracing pass that holds the scene's triangle BVH (silhouette hits).
+const BVH_GROUP: u32 = 2;
+
+/// The tracing pass: the photon-hit types and the scene's BVH (the exact rays of
+/// silhouette hits) before trace.wgsl.
+fn trace_source() -> String {
+    compose(&format!(
+        "{}\n{TRACE_WGSL}",
+        caustics_gpu::triangle_bvh::wgsl(BVH_GROUP)
+    ))
+}
+
+/// Index of the silhouette hits' counter (trace.wgsl `HIT_EDGE`, after the reasons).
+const COUNTER_EDGE: usize = 7;
 
 /// Bytes of one `PhotonHit` (types.wgsl; the layout test checks the two agree).
 pub const HIT_BYTES: u64 = std::mem::size_of::<PhotonHit>() as u64;
@@ -124,6 +149,7 @@ pub const COUNTER_DOCS: &[CounterDoc] = &[
     CounterDoc { name: "photons_no_exit", doc: "texels of a closed refractor whose exit point the search in the generator's distance map did not find (that sheet and every later one)" },
     CounterDoc { name: "photons_second_bounce", doc: "texels whose light, reflected off a mirror generator, meets that mirror again once its bounces further reflections are spent (the ring's opposite wall): dropped" },
     CounterDoc { name: "photons_no_receiver", doc: "texels whose light, leaving the generator, finds no surface in the receivers' distance map (it leaves the scene)" },
+    CounterDoc { name: "photon_hits_silhouette", doc: "texels whose centre misses the generator beside one that meets it, traced from the generator's exact edge between them (silhouette_hits): landed with the share of the texel's light on the generator's side, a hit at the silhouette's landing; not among photon_hits, and no longer among photons_missing_generator (a silhouette texel whose light lands nowhere is counted with the other reasons)" },
     CounterDoc { name: "photons_specular_receiver", doc: "texels whose light lands on another specular object (or where the receivers' distance map names no object): dropped, not traced on to the receivers behind it" },
 ];
 
@@ -154,6 +180,8 @@ caustics_method::method_params! {
         bounces: u32 = 0 => closed(0.0, 8.0);
         /// also follow the Fresnel reflection off a dielectric's first interface (paper: false)
         reflections: bool = false;
+        /// trace the texels beside the generator's silhouette from its exact edge, with the share of their light on the generator's side, so the reconstruction reaches the silhouette's landing instead of stopping a texel short of it (the ring's rim row; paper: false, the texel is dropped)
+        silhouette_hits: bool = false;
     }
 }
 
@@ -235,6 +263,7 @@ struct TraceUniform {
     generator_center: [f32; 4],
     view: [f32; 4],
     paths: [u32; 4],
+    clip_to_world: [[[f32; 4]; 4]; 6],
 }
 
 /// The sheets of the hit image (one per specular path a texel's light may take, see
@@ -315,7 +344,12 @@ impl Generator {
     ) -> TraceUniform {
         let (sheets, reflected) = sheets(self.kind, config);
         let flags = u32::from(self.kind == GeneratorKind::ClosedRefractor)
-            | (u32::from(view.projection == LightProjection::Orthographic) << 1);
+            | (u32::from(view.projection == LightProjection::Orthographic) << 1)
+            | (u32::from(config.silhouette_hits) << 2);
+        let mut clip_to_world = [[[0.0; 4]; 4]; 6];
+        for (m, face) in clip_to_world.iter_mut().zip(&view.faces) {
+            *m = face.view_proj.inverse().to_cols_array_2d();
+        }
         let generator_reach = maps.generator.as_ref().map_or(0.0, |m| m.reach);
         TraceUniform {
             faces,
@@ -331,6 +365,7 @@ impl Generator {
                 reflected.unwrap_or(u32::MAX),
                 light as u32,
             ],
+            clip_to_world,
         }
     }
 }
@@ -530,7 +565,9 @@ impl PhotonHits {
             })??;
         // §4.1: each texel's light reflected or refracted through the generator onto
         // the receiver it lands on.
-        let shader = Shader::new(ctx, "photon-hits trace.wgsl", compose(TRACE_WGSL))?;
+        let shader = Shader::new(ctx, "photon-hits trace.wgsl", trace_source())?;
+        // Built once per scene and shared; the ledger counts it with the scene.
+        let bvh = gpu_scene.triangle_bvh(ctx)?;
         let light_views = [
             &light_gbuffer.position,
             &light_gbuffer.normal,
@@ -556,6 +593,10 @@ impl PhotonHits {
                     ("trace_counters", &counters),
                 ],
             )
+            .bind(
+                BVH_GROUP,
+                &[("bvh_nodes", &bvh.nodes), ("bvh_triangles", &bvh.triangles)],
+            )
             .kernels(&["trace_photons"])
             .build()?;
         let bytes =
@@ -580,6 +621,11 @@ impl PhotonHits {
                     format!("photon_hits_bounce_{k}"),
                 )
             }))
+            .chain(
+                config
+                    .silhouette_hits
+                    .then(|| (COUNTER_EDGE, "photon_hits_silhouette".to_string())),
+            )
             .collect();
         Ok(Self {
             gbuffer_name: format!("{method}/light_gbuffer"),
@@ -706,14 +752,14 @@ mod tests {
             "@group(1) @binding(0) var<uniform> cm: CausticMapUniform;\n{SPLAT_KERNEL_WGSL}"
         );
         shader::validate_wgsl("splat_kernel.wgsl", &compose(&kernel_user))?;
-        shader::validate_wgsl("trace.wgsl", &compose(TRACE_WGSL))?;
+        shader::validate_wgsl("trace.wgsl", &trace_source())?;
         shader::validate_wgsl("lookup.wgsl", &compose(LOOKUP_WGSL))
     }
 
     #[test]
     fn structs_match_their_wgsl() {
         caustics_gpu::assert_wgsl_layout!(
-            compose(TRACE_WGSL),
+            trace_source(),
             TraceUniform {
                 faces,
                 resolution,
@@ -722,11 +768,12 @@ mod tests {
                 center,
                 generator_center,
                 view,
-                paths
+                paths,
+                clip_to_world
             }
         );
         caustics_gpu::assert_wgsl_layout!(
-            compose(TRACE_WGSL),
+            trace_source(),
             PhotonHit {
                 position,
                 normal,
@@ -754,6 +801,7 @@ mod tests {
         let mut names: Vec<String> = HIT_REASONS.iter().map(|(_, n)| (*n).into()).collect();
         names.push("photon_texels".into());
         names.push("photon_hits_fresnel_reflection".into());
+        names.push("photon_hits_silhouette".into());
         names.extend((1..=MAX_BOUNCES).map(|k| format!("photon_hits_bounce_{k}")));
         if let Err(e) = caustics_method::CounterDoc::check(COUNTER_DOCS, &names) {
             panic!("{e}");
@@ -762,7 +810,7 @@ mod tests {
 
     #[test]
     fn counters_buffer_follows_the_wgsl_constants() {
-        let wgsl = compose(TRACE_WGSL);
+        let wgsl = trace_source();
         let constant = |name| caustics_gpu::layout::wgsl_u32_constant(&wgsl, name).ok();
         assert_eq!(
             constant("COUNTER_REFLECTED"),
@@ -773,6 +821,9 @@ mod tests {
             Some(COUNTER_REFLECTED as u32 + 1)
         );
         assert!(HIT_REASONS.len() <= COUNTER_REFLECTED);
+        // The silhouette hits' counter: the slot after the reasons, before the orders.
+        assert_eq!(constant("HIT_EDGE"), Some(COUNTER_EDGE as u32));
+        assert!(HIT_REASONS.len() <= COUNTER_EDGE && COUNTER_EDGE < COUNTER_REFLECTED);
         // Every order of a path fits below the reflection's path id.
         assert!(MAX_BOUNCES < constant("PATH_REFLECTED").unwrap_or(0));
         assert_eq!(
@@ -814,6 +865,7 @@ mod tests {
             distance_tolerance: 0.05,
             bounces: 0,
             reflections: false,
+            silhouette_hits: false,
         };
         assert!(good.check().is_ok());
         for (bad, needle) in [

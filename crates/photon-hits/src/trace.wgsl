@@ -19,6 +19,18 @@
 //   wall), up to `bounces`, in sheet 0 with their own path id;
 // * off a dielectric, the Fresnel reflection at the first interface, in the last sheet.
 // Hit slot of (sheet, face, texel): (sheet × faces + face) × texels per face + texel.
+//
+// Silhouette hits (FLAG_SILHOUETTE, caustic-triangles' `silhouette_hits`, off by
+// default as in the paper): a texel whose centre's light misses the generator but one
+// of whose eight neighbours meets it stands for the generator's edge between them. Its
+// ray is bisected between the two texel centres against the exact scene (the triangle
+// BVH and the analytic shapes) to the last direction that still meets the generator,
+// and that light is traced on as any texel's, landing as HIT_EDGE. It carries the
+// light of the part of its texel on the generator's side of the edge (the texel spans
+// the second half of the way from the neighbour's centre on; the paper drops that
+// light with the texel). Triangles then reach the silhouette's landing instead of
+// stopping one texel short of it: a one-texel strip that a fast-turning reflection
+// (the ring's rim) spreads over tens of centimetres of floor.
 
 struct TraceUniform {
     // Faces of the light view (1 or 6).
@@ -40,10 +52,13 @@ struct TraceUniform {
     // x: further specular events followed on the generator (`bounces`); y: sheets of
     // the hit image; z: the Fresnel-reflection sheet, or NONE; w: the light (index into `lights`).
     paths: vec4<u32>,
+    // Clip → world of each face of the light view (silhouette hits: texel rays).
+    clip_to_world: array<mat4x4<f32>, 6>,
 }
 
 const FLAG_CLOSED: u32 = 1u;
 const FLAG_ORTHOGRAPHIC: u32 = 2u;
+const FLAG_SILHOUETTE: u32 = 4u;
 
 @group(1) @binding(0) var<uniform> tu: TraceUniform;
 @group(1) @binding(1) var light_position: texture_2d_array<f32>;
@@ -58,6 +73,7 @@ const FLAG_ORTHOGRAPHIC: u32 = 2u;
 // reflection (COUNTER_REFLECTED) and of each further bounce k (COUNTER_BOUNCE + k - 1).
 @group(1) @binding(9) var<storage, read_write> trace_counters: array<atomic<u32>>;
 
+// HIT_EDGE's counter is the slot after the HIT_* reasons (index 7).
 const COUNTER_REFLECTED: u32 = 8u;
 const COUNTER_BOUNCE: u32 = 9u;
 // Path ids: (generator × 2 + side) × PATH_ORDERS + order, where order is the number of
@@ -118,8 +134,13 @@ fn sheet_slot(texel_slot: u32, sheet: u32) -> u32 {
     return texel_slot + sheet * tu.faces * tu.resolution * tu.resolution;
 }
 
+// Whether the texel being traced is a silhouette texel (a private, since `land`
+// stores it with every sheet).
+var<private> on_edge: bool = false;
+
 // Light leaving the generator at `p` along `d` with `flux`: the receiver it lands on,
-// stored in `slot`; false (and the slot invalid) where it lands on none.
+// stored in `slot`; false (and the slot invalid) where it lands on none. A silhouette
+// texel's landing is stored as HIT_EDGE (counted apart; a valid hit otherwise).
 fn land(slot: u32, p: vec3<f32>, d: vec3<f32>, flux: vec3<f32>, path: u32, footprint: f32) -> bool {
     // The receiver: the distance map of the diffuse objects around the centre.
     let c = tu.center.xyz;
@@ -137,10 +158,106 @@ fn land(slot: u32, p: vec3<f32>, d: vec3<f32>, flux: vec3<f32>, path: u32, footp
     h.position = vec4<f32>(hit.position, length(hit.position - c));
     h.normal = vec4<f32>(select(hit.normal, -hit.normal, dot(hit.normal, d) > 0.0), footprint);
     h.flux = vec4<f32>(flux, 0.0);
+    if on_edge {
+        h.ids = vec4<u32>(receiver, path, HIT_EDGE, 0u);
+        hits[slot] = h;
+        atomicAdd(&trace_counters[HIT_EDGE], 1u);
+        return false;
+    }
     h.ids = vec4<u32>(receiver, path, HIT_VALID, 0u);
     hits[slot] = h;
     atomicAdd(&trace_counters[HIT_VALID], 1u);
     return true;
+}
+
+// The world ray of the light view through texel coordinates `uv` (texels, centres at
+// +0.5) of face `layer`.
+struct TexelRay {
+    o: vec3<f32>,
+    d: vec3<f32>,
+}
+
+fn texel_ray(layer: i32, uv: vec2<f32>) -> TexelRay {
+    let n = f32(tu.resolution);
+    // Row 0 at the top: NDC y up.
+    let ndc = vec2<f32>(uv.x / n * 2.0 - 1.0, 1.0 - uv.y / n * 2.0);
+    let m = tu.clip_to_world[layer];
+    let near = m * vec4<f32>(ndc, 0.0, 1.0);
+    let far = m * vec4<f32>(ndc, 1.0, 1.0);
+    let a = near.xyz / near.w;
+    let b = far.xyz / far.w;
+    return TexelRay(a, normalize(b - a));
+}
+
+// The first surface along `r` if it is the generator (object NONE otherwise).
+fn generator_hit(r: TexelRay) -> SceneHit {
+    let hit = scene_closest_hit(r.o, r.d, 0.0, NONE);
+    if hit.object != tu.generator {
+        return SceneHit(NO_HIT, NONE, vec3<f32>(0.0), vec3<f32>(0.0));
+    }
+    return hit;
+}
+
+// The generator's edge next to `texel` (which misses it): the first of its eight
+// neighbours that meets the generator in the light G-buffer, and the last direction
+// between the two texel centres that still meets it exactly (8 bisections: 1/256 of a
+// texel). found = false where there is none; `fraction` is the share of this texel's
+// light on the generator's side (the texel spans [0.5, 1.5] of the way from the
+// neighbour's centre, the edge lies at `lo` ∈ [0, 1]: max(lo − 0.5, 0)).
+struct Edge {
+    found: bool,
+    point: vec3<f32>,
+    n: vec3<f32>,
+    fraction: f32,
+}
+
+fn silhouette_edge(texel: vec2<i32>, layer: i32) -> Edge {
+    var none: Edge;
+    none.found = false;
+    let res = i32(tu.resolution);
+    let offsets = array<vec2<i32>, 8>(
+        vec2<i32>(1, 0), vec2<i32>(-1, 0), vec2<i32>(0, 1), vec2<i32>(0, -1),
+        vec2<i32>(1, 1), vec2<i32>(-1, 1), vec2<i32>(1, -1), vec2<i32>(-1, -1),
+    );
+    for (var k = 0u; k < 8u; k++) {
+        let q = texel + offsets[k];
+        if any(q < vec2<i32>(0)) || any(q >= vec2<i32>(res)) {
+            continue;
+        }
+        let q_pos = textureLoad(light_position, q, layer, 0);
+        if q_pos.w < 0.5 || textureLoad(light_ids, q, layer, 0).x != tu.generator {
+            continue;
+        }
+        let inside = vec2<f32>(q) + 0.5;
+        let outside = vec2<f32>(texel) + 0.5;
+        var best_ray = texel_ray(layer, inside);
+        var best = generator_hit(best_ray);
+        if best.object == NONE {
+            // The exact scene and the rasterized G-buffer disagree at this texel.
+            continue;
+        }
+        var lo = 0.0;
+        var hi = 1.0;
+        for (var step = 0u; step < 8u; step++) {
+            let mid = 0.5 * (lo + hi);
+            let ray = texel_ray(layer, mix(inside, outside, vec2<f32>(mid)));
+            let hit = generator_hit(ray);
+            if hit.object != NONE {
+                lo = mid;
+                best = hit;
+                best_ray = ray;
+            } else {
+                hi = mid;
+            }
+        }
+        var e: Edge;
+        e.found = true;
+        e.point = best_ray.o + best.t * best_ray.d;
+        e.n = best.ns;
+        e.fraction = max(lo - 0.5, 0.0);
+        return e;
+    }
+    return none;
 }
 
 // A valid hit of a further bounce `order` (≥ 1) or of the reflection is also counted
@@ -166,15 +283,27 @@ fn trace_photons(@builtin(global_invocation_id) gid: vec3<u32>) {
     let texel = vec2<i32>(i32(k % tu.resolution), i32(k / tu.resolution));
     let pos = textureLoad(light_position, texel, layer, 0);
     let obj_id = textureLoad(light_ids, texel, layer, 0).x;
+    var p0 = pos.xyz;
+    var n_g = normalize(textureLoad(light_normal, texel, layer, 0).xyz);
+    var edge: Edge;
+    edge.found = false;
     if pos.w < 0.5 || obj_id != tu.generator {
-        // The light meets nothing, or a diffuse object first: no caustic path here.
-        for (var s = 0u; s < sheets; s++) {
-            store_invalid(sheet_slot(i, s), HIT_NOT_GENERATOR);
+        if (tu.flags & FLAG_SILHOUETTE) != 0u {
+            edge = silhouette_edge(texel, layer);
         }
-        return;
+        if !edge.found {
+            // The light meets nothing, or a diffuse object first: no caustic path here.
+            for (var s = 0u; s < sheets; s++) {
+                store_invalid(sheet_slot(i, s), HIT_NOT_GENERATOR);
+            }
+            return;
+        }
+        // Traced from the generator's edge beside this texel.
+        p0 = edge.point;
+        n_g = edge.n;
+        on_edge = true;
     }
     let light = lights[tu.paths.w];
-    let p0 = pos.xyz;
     // Direction of the texel's light and the power through the texel (§4.1: "the power
     // going through a pixel of the light's camera"): irradiance × texel area for a
     // directional light, intensity × texel solid angle for a point/spot light, where a
@@ -196,8 +325,12 @@ fn trace_photons(@builtin(global_invocation_id) gid: vec3<u32>) {
         flux = light_intensity(light, d) * omega;
         footprint = omega * dist * dist;
     }
+    if on_edge {
+        // The share of the texel's light on the generator's side of the edge; the
+        // footprint stays the texel's, for the stretch rule of its triangles.
+        flux *= edge.fraction;
+    }
     let mat = materials[objects[tu.generator].material];
-    let n_g = normalize(textureLoad(light_normal, texel, layer, 0).xyz);
     // Path id: the generator and the side of its surface the light met (the ring's
     // inner and outer walls make two sheets that must not be joined by triangles),
     // then the order of the path.
