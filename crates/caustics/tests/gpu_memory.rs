@@ -93,6 +93,9 @@ fn a_method_that_fits_alone_but_not_beside_the_renderer_is_refused() {
         RendererOptions::default(),
     )
     .expect("renderer");
+    // The scene's BVH (the photon tracing binds it) is the scene's, built once: counted
+    // with the renderer here.
+    renderer.scene().triangle_bvh(&ctx).expect("bvh");
     let base = ctx.memory.held_bytes();
     let method = (splatting.create)(&ctx, &renderer, &params).expect("fits the default budget");
     let alone = ctx.memory.held_bytes() - base;
@@ -109,6 +112,8 @@ fn a_method_that_fits_alone_but_not_beside_the_renderer_is_refused() {
         RendererOptions::default(),
     )
     .expect("the renderer fits alone");
+    renderer.scene().triangle_bvh(&ctx).expect("bvh");
+    assert_eq!(ctx.memory.held_bytes(), base);
     let e = match (splatting.create)(&ctx, &renderer, &params) {
         Ok(_) => panic!("splatting fitted beside the renderer in a budget of {budget} bytes"),
         Err(e) => e.to_string(),
