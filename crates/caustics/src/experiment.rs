@@ -540,13 +540,13 @@ impl Experiment {
                 }
                 for method in &methods {
                     let info = registry::find(method)
-                        .map_err(|e| invalid(&at("methods"), format!("{e:#}")))?;
+                        .map_err(|e| invalid(&at("methods"), crate::error_text(&e)))?;
                     for params in &param_sets {
                         let value = serde_json::Value::Object(params.clone());
                         registry::parse_params(&info, &value).map_err(|e| {
                             invalid(
                                 &at("params"),
-                                format!("{e:#} (in the parameter set {value})"),
+                                format!("{} (in the parameter set {value})", crate::error_text(&e)),
                             )
                         })?;
                         let spec = RunSpec {
@@ -750,7 +750,7 @@ fn select_methods(
     };
     let mut seen = BTreeSet::new();
     for (i, n) in names.iter().enumerate() {
-        registry::find(n).map_err(|e| invalid(&format!("{at}[{i}]"), format!("{e:#}")))?;
+        registry::find(n).map_err(|e| invalid(&format!("{at}[{i}]"), crate::error_text(&e)))?;
         if !seen.insert(n) {
             return Err(invalid(
                 &format!("{at}[{i}]"),

@@ -33,6 +33,22 @@ macro_rules! out {
     }};
 }
 
+/// An error with its causes, each said once: `outer: cause: cause`, as anyhow's `{:#}`
+/// writes it, except that a cause whose text the message already holds is not repeated
+/// (the library errors write their source into their own message, e.g. "cannot load
+/// mesh huge.obj: vertex 1 …", so `{:#}` said every mesh refusal twice).
+pub fn error_text(e: &anyhow::Error) -> String {
+    let mut text = e.to_string();
+    for cause in e.chain().skip(1) {
+        let cause = cause.to_string();
+        if !text.contains(&cause) {
+            text.push_str(": ");
+            text.push_str(&cause);
+        }
+    }
+    text
+}
+
 pub mod cli;
 pub mod compare;
 pub mod experiment;
@@ -52,3 +68,30 @@ pub mod run;
 pub mod schemas;
 pub mod stats;
 pub mod summary;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[derive(Debug, thiserror::Error)]
+    #[error("cannot load mesh huge.obj: {source}")]
+    struct Wrapping {
+        source: std::io::Error,
+    }
+
+    #[test]
+    fn each_cause_is_said_once() {
+        let inner = std::io::Error::other("vertex 1: expected coordinates within 1e6 m");
+        let e = anyhow::Error::new(Wrapping { source: inner }).context("scene.json");
+        assert_eq!(
+            format!("{e:#}"),
+            "scene.json: cannot load mesh huge.obj: vertex 1: expected coordinates within 1e6 m: vertex 1: expected coordinates within 1e6 m"
+        );
+        assert_eq!(
+            error_text(&e),
+            "scene.json: cannot load mesh huge.obj: vertex 1: expected coordinates within 1e6 m"
+        );
+        let plain = anyhow::anyhow!("outer").context("context");
+        assert_eq!(error_text(&plain), format!("{plain:#}"));
+    }
+}

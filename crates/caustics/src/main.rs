@@ -130,7 +130,7 @@ fn main() -> ExitCode {
     match outcome {
         Ok(code) => code,
         Err(e) => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", caustics::error_text(&e));
             ExitCode::FAILURE
         }
     }

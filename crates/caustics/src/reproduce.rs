@@ -581,7 +581,7 @@ fn run_one(e: &Experiment, spec: &RunSpec, args: &ReproduceArgs, out: &Path) -> 
             status("done", Some(rel.display().to_string()), None)
         }
         Ok(RunOutcome::Skipped { reason }) => status("skipped", None, Some(reason)),
-        Err(err) => status("failed", None, Some(format!("{err:#}"))),
+        Err(err) => status("failed", None, Some(crate::error_text(&err))),
     }
 }
 

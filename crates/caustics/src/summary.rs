@@ -7,7 +7,7 @@ use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::Path;
 
-use anyhow::{Context, Result};
+use anyhow::{Context, Result, bail};
 use serde::{Deserialize, Serialize};
 
 use crate::experiment::{Experiment, figure_matches};
@@ -439,6 +439,24 @@ pub fn read_summary(dir: &Path) -> Result<Summary> {
     let text = std::fs::read_to_string(&p).with_context(|| format!("reading {}", p.display()))?;
     let mut s: Summary = serde_json::from_str(&text)
         .with_context(|| format!("{}: not a summary.json", p.display()))?;
+    // A done run's folder is read by the report and figures: it must be a folder of
+    // this experiment that holds a result.json (a summary from elsewhere, or edited,
+    // may name one that is not there, or one outside the experiment).
+    for (i, r) in s.runs.iter().enumerate() {
+        let Some(rel) = r.dir.as_deref().filter(|_| r.status == "done") else {
+            continue;
+        };
+        let inside = Path::new(rel)
+            .components()
+            .all(|c| matches!(c, std::path::Component::Normal(_)));
+        if !inside || !dir.join(rel).join("result.json").is_file() {
+            bail!(
+                "{}: runs[{i}].dir: {rel:?} is not a run folder of this experiment (expected a relative path below {} holding a result.json)",
+                p.display(),
+                dir.display()
+            );
+        }
+    }
     for r in &mut s.runs {
         if r.score_spp.is_none() && r.errors_1spp.is_none() && r.errors.is_some() {
             r.errors_1spp = r.errors.take();
