@@ -20,7 +20,7 @@
 // * off a dielectric, the Fresnel reflection at the first interface, in the last sheet.
 // Hit slot of (sheet, face, texel): (sheet × faces + face) × texels per face + texel.
 //
-// Silhouette hits (FLAG_SILHOUETTE, caustic-triangles' `silhouette_hits`, off by
+// Silhouette hits (FLAG_SILHOUETTE, the photon-hit methods' `silhouette_hits`, off by
 // default as in the paper): a texel whose centre's light misses the generator but one
 // of whose eight neighbours meets it stands for the generator's edge between them. Its
 // ray is bisected between the two texel centres against the exact scene (the triangle

@@ -34,7 +34,7 @@ const HIT_NO_EXIT: u32 = 3u;
 const HIT_SECOND_BOUNCE: u32 = 4u;
 const HIT_NO_RECEIVER: u32 = 5u;
 const HIT_SPECULAR_RECEIVER: u32 = 6u;
-// A silhouette hit (caustic-triangles' `silhouette_hits`): the landing of the light
+// A silhouette hit (`silhouette_hits`): the landing of the light
 // through the generator's edge beside a texel whose centre misses it, carrying the
 // share of the texel's light on the generator's side. A valid hit otherwise.
 const HIT_EDGE: u32 = 7u;
