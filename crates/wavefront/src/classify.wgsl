@@ -11,6 +11,9 @@ struct Counters {
     dropped_invalid_vertex: atomic<u32>,
     dropped_receiver_mismatch: atomic<u32>,
     dropped_path_mismatch: atomic<u32>,
+    // Landed vertices of dropped triangles, summed over the triangles (a vertex counts
+    // once per dropped triangle it is a corner of): the orphans pass's points.
+    orphan_corners: atomic<u32>,
 }
 
 @group(1) @binding(0) var<uniform> tp: TraceParams;
@@ -29,16 +32,22 @@ fn classify_triangles(@builtin(global_invocation_id) gid: vec3<u32>) {
     let b = traced[triangles[3u * tri + 1u]];
     let c = traced[triangles[3u * tri + 2u]];
     keep[tri] = 0u;
+    let landed = u32(a.info.x != NONE) + u32(b.info.x != NONE) + u32(c.info.x != NONE);
+    if landed < 3u {
+        atomicAdd(&counters.orphan_corners, landed);
+    }
     if a.info.x == NONE || b.info.x == NONE || c.info.x == NONE {
         atomicAdd(&counters.dropped_invalid_vertex, 1u);
         return;
     }
     if a.info.x != b.info.x || a.info.x != c.info.x || a.new_pos.w != b.new_pos.w || a.new_pos.w != c.new_pos.w {
         atomicAdd(&counters.dropped_receiver_mismatch, 1u);
+        atomicAdd(&counters.orphan_corners, 3u);
         return;
     }
     if a.info.z != b.info.z || a.info.z != c.info.z {
         atomicAdd(&counters.dropped_path_mismatch, 1u);
+        atomicAdd(&counters.orphan_corners, 3u);
         return;
     }
     keep[tri] = 1u;

@@ -32,9 +32,12 @@
 //! one smooth wavefront, and together a partition of the light: `bounces` adds the
 //! light reflected 1..=bounces times inside a closed refractor before it leaves (and
 //! allows as many hits on an object already left, a mirror's opposite wall),
-//! `reflections` the Fresnel reflection off each dielectric generator. Like the
-//! original it point-samples triangles thinner than a pixel (noisy cusps), and it
-//! renders no media.
+//! `reflections` the Fresnel reflection off each dielectric generator. A triangle whose
+//! vertices part (one leaves the sheet, or they reach different receivers or paths) has
+//! no area ratio and Wallace drops it; `splat_orphans` draws its landed vertices as
+//! one-pixel points of a third of its flux each (`orphans.wgsl`), which a bumpy
+//! refractor's speckle of total internal reflections needs. Like the original it
+//! point-samples triangles thinner than a pixel (noisy cusps), and it renders no media.
 
 mod sources;
 
@@ -58,6 +61,7 @@ const TYPES_WGSL: &str = include_str!("types.wgsl");
 const TRACE_WGSL: &str = include_str!("trace.wgsl");
 const CLASSIFY_WGSL: &str = include_str!("classify.wgsl");
 const SPLAT_WGSL: &str = include_str!("splat.wgsl");
+const ORPHANS_WGSL: &str = include_str!("orphans.wgsl");
 
 /// A pass's full WGSL: shared GPU files, wavefront's types, then the pass.
 fn pass_source(pass: &str) -> String {
@@ -91,6 +95,11 @@ method_params! {
         bounces: u32 = 0 => closed(0.0, 8.0);
         /// also a sheet of the Fresnel reflection off each dielectric generator (Wallace: false)
         reflections: bool = false;
+        /// also draw the light of the triangles classify drops (vertices that took
+        /// different paths, receivers, or left the sheet) as one-pixel points at each
+        /// landed vertex, a third of the triangle's flux each (Wallace: false, that light
+        /// is lost)
+        splat_orphans: bool = false;
     }
 }
 
@@ -179,7 +188,7 @@ struct TraceParams {
     _pad: [u32; 2],
 }
 
-/// Matches `SplatParams` in splat.wgsl.
+/// Matches `SplatParams` in types.wgsl.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 struct SplatParams {
@@ -187,13 +196,14 @@ struct SplatParams {
     _pad: [f32; 3],
 }
 
-/// Names of the kept and dropped triangle counts, in the order of `Counters` in
-/// classify.wgsl.
-const TRIANGLE_COUNTERS: [&str; 4] = [
+/// Names of the kept and dropped triangle counts and the orphan corners, in the order
+/// of `Counters` in classify.wgsl.
+const TRIANGLE_COUNTERS: [&str; 5] = [
     "kept_triangles",
     "dropped_invalid_vertex",
     "dropped_receiver_mismatch",
     "dropped_path_mismatch",
+    "orphan_corners",
 ];
 
 /// Names of the vertex outcomes, in the order of `VertexCounts` in trace.wgsl (the
@@ -225,6 +235,7 @@ const COUNTER_DOCS: &[CounterDoc] = &[
     CounterDoc { name: "dropped_invalid_vertex", doc: "triangles dropped because at least one of their vertices did not land (any vertices_* drop)" },
     CounterDoc { name: "dropped_receiver_mismatch", doc: "triangles dropped because their vertices landed on different receivers, or on different sides of one" },
     CounterDoc { name: "dropped_path_mismatch", doc: "triangles dropped because their vertices took different specular paths (the objects met and the side each was met from, in order)" },
+    CounterDoc { name: "orphan_corners", doc: "landed vertices of dropped triangles, once per dropped triangle they are a corner of: each carries a third of its triangle's flux, lost unless splat_orphans draws it as a one-pixel point" },
     CounterDoc { name: "dropped_face_mismatch", doc: "older results only (now dropped_path_mismatch): triangles dropped because their vertices met different sides of the generator (a ring's outer and inner walls)" },
     CounterDoc { name: "vertices_landed", doc: "vertices whose ray reached a diffuse receiver along its sheet's path" },
     CounterDoc { name: "vertices_landed_after_rehit", doc: "those of vertices_landed whose path met an object it had already left again on the way (a mirror ring's opposite wall; only with bounces > 0)" },
@@ -264,6 +275,8 @@ struct Sheet {
     trace_group: wgpu::BindGroup,
     classify_group: wgpu::BindGroup,
     splat_group: wgpu::BindGroup,
+    /// With `splat_orphans`: the orphans pass's group 1 (splat.wgsl's bindings).
+    orphan_group: Option<wgpu::BindGroup>,
     bytes: u64,
 }
 
@@ -272,6 +285,8 @@ pub struct Wavefront {
     trace: ComputePass,
     classify: ComputePass,
     splat: RasterPass,
+    /// With `splat_orphans`: the landed vertices of dropped triangles, as points.
+    orphans: Option<RasterPass>,
     sheets: Vec<Sheet>,
     /// `TRIANGLE_COUNTERS` and `VERTEX_COUNTERS`, summed over the sheets.
     triangle_counts: wgpu::Buffer,
@@ -329,11 +344,32 @@ impl Wavefront {
             .fragment("fs_splat", &[Some(additive_hdr_target())])
             .counted()
             .build()?;
+        let orphans = if params.splat_orphans {
+            let shader = Shader::new(ctx, "wavefront orphans.wgsl", pass_source(ORPHANS_WGSL))?;
+            Some(
+                RasterPass::builder(ctx, "wavefront/orphan_points", &shader, "vs_orphan")
+                    .frame(renderer)
+                    .caller_group(1)
+                    .primitive(wgpu::PrimitiveState {
+                        topology: wgpu::PrimitiveTopology::PointList,
+                        ..Default::default()
+                    })
+                    .fragment("fs_orphan", &[Some(additive_hdr_target())])
+                    .counted()
+                    .build()?,
+            )
+        } else {
+            None
+        };
         let (trace_schema, classify_schema, splat_schema) = (
             group_one(trace.schema(1), "trace")?,
             group_one(classify.schema(1), "classify")?,
             group_one(splat.schema(1), "splat")?,
         );
+        let orphan_schema = match &orphans {
+            Some(pass) => Some(group_one(pass.schema(1), "orphans")?),
+            None => None,
+        };
 
         let zeros = [0u32; TRIANGLE_COUNTERS.len() + VERTEX_COUNTERS.len()];
         let (triangle_counts, vertex_counts, counters_init) =
@@ -452,6 +488,7 @@ impl Wavefront {
                                 trace: trace_schema,
                                 classify: classify_schema,
                                 splat: splat_schema,
+                                orphans: orphan_schema,
                                 triangle_counts: &triangle_counts,
                                 vertex_counts: &vertex_counts,
                             },
@@ -470,6 +507,7 @@ impl Wavefront {
             trace,
             classify,
             splat,
+            orphans,
             sheets,
             triangle_counts,
             vertex_counts,
@@ -498,6 +536,7 @@ struct SheetGroups<'a> {
     trace: &'a BindGroupSchema,
     classify: &'a BindGroupSchema,
     splat: &'a BindGroupSchema,
+    orphans: Option<&'a BindGroupSchema>,
     triangle_counts: &'a wgpu::Buffer,
     vertex_counts: &'a wgpu::Buffer,
 }
@@ -569,6 +608,18 @@ impl Sheet {
                 ("keep", &keep),
             ],
         )?;
+        let orphan_group = match groups.orphans {
+            Some(schema) => Some(schema.bind(
+                device,
+                &[
+                    ("sp", &splat_params),
+                    ("traced", &traced),
+                    ("triangles", triangles),
+                    ("keep", &keep),
+                ],
+            )?),
+            None => None,
+        };
         let bytes = [&trace_params, &splat_params, &traced, &keep]
             .iter()
             .map(|b| b.size())
@@ -579,6 +630,7 @@ impl Sheet {
             trace_group,
             classify_group,
             splat_group,
+            orphan_group,
             bytes,
         })
     }
@@ -620,10 +672,22 @@ impl CausticsMethod for Wavefront {
             }
         }
         let attachments = [load_attachment(&renderer.targets().surface.view)];
-        let mut pass = self.splat.begin(frame, &attachments, None)?;
-        for sheet in &self.sheets {
-            pass.set_bind_group(1, &sheet.splat_group, &[]);
-            pass.draw(0..3 * sheet.triangle_count, 0..1);
+        {
+            let mut pass = self.splat.begin(frame, &attachments, None)?;
+            for sheet in &self.sheets {
+                pass.set_bind_group(1, &sheet.splat_group, &[]);
+                pass.draw(0..3 * sheet.triangle_count, 0..1);
+            }
+        }
+        if let Some(orphans) = &self.orphans {
+            let mut pass = orphans.begin(frame, &attachments, None)?;
+            for sheet in &self.sheets {
+                if let Some(group) = &sheet.orphan_group {
+                    pass.set_bind_group(1, group, &[]);
+                    // One point per (triangle, corner).
+                    pass.draw(0..3 * sheet.triangle_count, 0..1);
+                }
+            }
         }
         Ok(())
     }
@@ -668,7 +732,8 @@ mod tests {
     fn shaders_validate() -> Result<(), String> {
         shader::validate_wgsl("trace.wgsl", &trace_source())?;
         shader::validate_wgsl("classify.wgsl", &pass_source(CLASSIFY_WGSL))?;
-        shader::validate_wgsl("splat.wgsl", &pass_source(SPLAT_WGSL))
+        shader::validate_wgsl("splat.wgsl", &pass_source(SPLAT_WGSL))?;
+        shader::validate_wgsl("orphans.wgsl", &pass_source(ORPHANS_WGSL))
     }
 
     /// Every counter `Wavefront::counters` reports has a doc.
@@ -766,7 +831,7 @@ mod tests {
         use caustics_method::MethodParams;
         assert_eq!(
             serde_json::Value::Object(WavefrontParams::default().to_json()),
-            serde_json::json!({"grid": 512, "tolerance": 2e-3, "bounces": 0, "reflections": false})
+            serde_json::json!({"grid": 512, "tolerance": 2e-3, "bounces": 0, "reflections": false, "splat_orphans": false})
         );
     }
 }

@@ -6,14 +6,6 @@
 // exact for the affine map over a triangle and needs no geometry shader. Overlapping
 // sheets (folds of the wavefront) add up through additive blending.
 
-struct SplatParams {
-    // Accept a fragment when |G-buffer position - receiver point| <= tolerance × distance to the eye.
-    tolerance: f32,
-    pad0: f32,
-    pad1: f32,
-    pad2: f32,
-}
-
 @group(1) @binding(0) var<uniform> sp: SplatParams;
 @group(1) @binding(1) var<storage, read> traced: array<Traced>;
 @group(1) @binding(2) var<storage, read> triangles: array<u32>;

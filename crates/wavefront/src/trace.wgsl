@@ -73,10 +73,27 @@ struct VertexCounts {
     bounced: atomic<u32>,
 }
 
+// The light-space coordinate of this invocation's vertex (see light_coordinate), set
+// before any outcome: an invalid vertex keeps it too, so that a dropped triangle's
+// area in the light's parametrization is known (the orphans pass divides it).
+var<private> vertex_old_pos: vec3<f32>;
+
 fn invalid(why: u32) -> Traced {
     var v: Traced;
+    v.old_pos = vec4<f32>(vertex_old_pos, 0.0);
     v.info = vec4<u32>(NONE, why, 0u, 0u);
     return v;
+}
+
+// Where a light ray through `p` along `d` sits in the light's parametrization: on the
+// plane perpendicular to a directional light (m), or its unit direction from a point or
+// spot light (the triangle of three is the solid angle, sr).
+fn light_coordinate(light: GpuLight, p: vec3<f32>, d: vec3<f32>) -> vec3<f32> {
+    if light.kind == LIGHT_DIRECTIONAL {
+        let l = light.direction.xyz;
+        return p - dot(p, l) * l;
+    }
+    return d;
 }
 
 fn count_vertex(why: u32) {
@@ -124,6 +141,7 @@ fn trace_vertices(@builtin(global_invocation_id) gid: vec3<u32>) {
     var light_dist = NO_HIT;
     if src.origin.w == SOURCE_RAY {
         d = src.dir_or_normal.xyz;
+        vertex_old_pos = light_coordinate(light, src.origin.xyz, d);
         let first = scene_closest_hit(src.origin.xyz, d, 0.0, NONE);
         if first.object != generator {
             traced[i] = invalid(INVALID_MISSED_GENERATOR);
@@ -150,6 +168,7 @@ fn trace_vertices(@builtin(global_invocation_id) gid: vec3<u32>) {
             d = normalize(p - light.position.xyz);
             light_dist = length(p - light.position.xyz);
         }
+        vertex_old_pos = light_coordinate(light, p, d);
         // Is the vertex lit? (walls or other objects between the light and the surface)
         if scene_closest_hit(p, -d, eps, generator).t < light_dist - eps {
             traced[i] = invalid(INVALID_SHADOWED);
@@ -158,15 +177,12 @@ fn trace_vertices(@builtin(global_invocation_id) gid: vec3<u32>) {
         }
     }
 
-    // Light-space coordinate and the flux density the vertex carries.
-    var old_pos: vec3<f32>;
+    // The flux density the vertex carries.
+    let old_pos = vertex_old_pos;
     var flux: vec3<f32>;
     if light.kind == LIGHT_DIRECTIONAL {
-        let l = light.direction.xyz;
-        old_pos = p - dot(p, l) * l;
         flux = light.power.xyz;
     } else {
-        old_pos = d;
         flux = light_intensity(light, d);
     }
 

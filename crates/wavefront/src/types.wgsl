@@ -1,4 +1,4 @@
-// Types shared by wavefront's passes (trace, classify, splat).
+// Types shared by wavefront's passes (trace, classify, splat, orphans).
 
 // One wavefront vertex after tracing.
 struct Traced {
@@ -24,4 +24,12 @@ struct TraceParams {
     reflect_mask: u32,
     pad0: u32,
     pad1: u32,
+}
+
+struct SplatParams {
+    // Accept a fragment when |G-buffer position - receiver point| <= tolerance × distance to the eye.
+    tolerance: f32,
+    pad0: f32,
+    pad1: f32,
+    pad2: f32,
 }

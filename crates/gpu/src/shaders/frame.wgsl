@@ -63,3 +63,18 @@ fn gbuffer_sample(pixel: vec2<u32>) -> GSample {
     s.material = ids.y;
     return s;
 }
+
+// World area (m²) of one pixel's footprint on a surface at `position` with unit normal
+// `normal`: the pixel's solid angle, s² cos³α for square pixels of side
+// s = 2 tan(fov/2) / height at unit distance along the forward axis (α: the ray's angle
+// off that axis), times distance² over the cosine at the surface. A point of flux Φ
+// drawn into the pixel is an irradiance Φ / area there, so its energy is kept.
+fn pixel_footprint_m2(position: vec3<f32>, normal: vec3<f32>) -> f32 {
+    let to_eye = frame.eye.xyz - position;
+    let dist = length(to_eye);
+    let w = to_eye / dist;
+    let side = 2.0 * tan(0.5 * frame.eye.w) * frame.resolution.w;
+    let cos_axis = max(dot(-w, frame.forward.xyz), 1e-4);
+    let cos_surface = max(abs(dot(w, normal)), 1e-4);
+    return side * side * cos_axis * cos_axis * cos_axis * dist * dist / cos_surface;
+}

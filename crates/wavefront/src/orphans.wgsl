@@ -1,0 +1,74 @@
+// Pass 4 of wavefront, only with `splat_orphans`: the light of the triangles classify
+// drops, which Wallace loses. A dropped triangle whose vertices did not all take one
+// path to one receiver has no area ratio, but each vertex that landed still carries a
+// third of the triangle's flux (its flux density × the triangle's area in the light's
+// parametrization / 3: the vertex rule of quadrature over the triangle). Each such
+// share is drawn as a one-pixel point at the vertex's landing point, an irradiance of
+// share / (the pixel's footprint on the receiver). A vertex that left the sheet (total
+// internal reflection where the sheet transmits) is drawn by the sheet it belongs to, so
+// with `bounces` and `reflections` the sheets still partition the light. On a smooth
+// refractor few triangles are dropped; on a bumpy one, whose total internal
+// reflections speckle the wavefront, these points are a third of the caustic.
+
+@group(1) @binding(0) var<uniform> sp: SplatParams;
+@group(1) @binding(1) var<storage, read> traced: array<Traced>;
+@group(1) @binding(2) var<storage, read> triangles: array<u32>;
+@group(1) @binding(3) var<storage, read> keep: array<u32>;
+
+struct OrphanOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) new_pos: vec3<f32>,
+    // W: the vertex's share of the triangle's flux.
+    @location(1) flux_w: vec3<f32>,
+    @location(2) @interpolate(flat) receiver: u32,
+    @location(3) @interpolate(flat) side: f32,
+}
+
+// One point per (triangle, corner): vertex_index = 3 × triangle + corner.
+@vertex
+fn vs_orphan(@builtin(vertex_index) vi: u32) -> OrphanOut {
+    let tri = vi / 3u;
+    var o: OrphanOut;
+    o.clip = vec4<f32>(2.0, 2.0, 2.0, 1.0);
+    if keep[tri] != 0u {
+        // Kept: the splat pass draws its light.
+        return o;
+    }
+    let v = traced[triangles[vi]];
+    if v.info.x == NONE {
+        return o;
+    }
+    let a = traced[triangles[3u * tri]].old_pos.xyz;
+    let b = traced[triangles[3u * tri + 1u]].old_pos.xyz;
+    let c = traced[triangles[3u * tri + 2u]].old_pos.xyz;
+    let area_old = 0.5 * length(cross(b - a, c - a));
+    o.clip = frame.view_proj * vec4<f32>(v.new_pos.xyz, 1.0);
+    o.new_pos = v.new_pos.xyz;
+    o.flux_w = v.flux.xyz * (area_old / 3.0);
+    o.receiver = v.info.x;
+    o.side = v.new_pos.w;
+    return o;
+}
+
+@fragment
+fn fs_orphan(i: OrphanOut) -> @location(0) vec4<f32> {
+    count_fragment(i.clip);
+    let g = gbuffer_sample(vec2<u32>(i.clip.xy));
+    if !g.hit || g.object != i.receiver {
+        discard;
+    }
+    // The point is anywhere in the pixel, not at its centre: it must lie on the
+    // receiver's tangent plane there (within the splat pass's tolerance), not at the
+    // G-buffer's point.
+    let to_eye = frame.eye.xyz - g.position;
+    if abs(dot(g.position - i.new_pos, g.normal)) > sp.tolerance * length(to_eye) {
+        discard;
+    }
+    let camera_side = select(-1.0, 1.0, dot(to_eye, g.normal) >= 0.0);
+    if camera_side != i.side {
+        discard;
+    }
+    let irradiance = i.flux_w / pixel_footprint_m2(g.position, g.normal);
+    let albedo = materials[g.material].color.xyz;
+    return vec4<f32>(albedo * INV_PI * irradiance, 1.0);
+}
