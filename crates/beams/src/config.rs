@@ -51,6 +51,8 @@ method_params! {
         bounces: u32 = 0 => closed(0.0, MAX_BOUNCES as f64);
         /// how corner paths find their surfaces: impostor (distance impostors, the paper's Sect. 6) or bvh (exact: the scene's triangle BVH and analytic shapes, with the adjoint shading-normal factor; the light G-buffer and impostors are then not rendered)
         tracer: Tracer = Tracer::Impostor;
+        /// also splat the light of the families a leaf drops (its corners part ways: a silhouette, different paths or receivers): each landed corner as a one-pixel point of a third of the triangle's flux, on the surface caustic (paper: false, that light is lost; bound: max_beams point records)
+        splat_orphans: bool = false;
         /// sigma (px) of the low-pass filter on the surface caustic (Sect. 7), 0 = off (bound: a (4 sigma + 1)^2 gather per pixel)
         surface_filter_px: f64 = 1.0 => closed(0.0, 16.0);
         /// soft-particle fade of volume caustics near surfaces (m), 0 = off (segments are clipped exactly; bound: longer than any scene)

@@ -84,7 +84,7 @@ const SPLIT_HISTOGRAM: Word = Word {
     )
 };
 
-/// Every word, by index (words 0 to 7 and 44 to 63 are unused).
+/// Every word, by index (words 0 to 7 and 48 to 63 are unused).
 #[rustfmt::skip]
 pub(crate) const CONTROL: &[Word] = &[
     LEVEL,
@@ -110,6 +110,10 @@ pub(crate) const CONTROL: &[Word] = &[
     Word { span: Span::Families, ..counter("C_BEAMS_PER_FAMILY", 32, "beams_path", "beams emitted of each light-path family") },
     counter("C_BEAMS_REHIT", 42, "beams_path_rehit", "beams whose path meets a generator again (bounces)"),
     counter("C_BEAMS_TIR", 43, "beams_path_tir", "beams whose path is totally internally reflected on the way (bounces)"),
+    state("C_ORPHAN_BASE", 44, "first orphan record slot of this level's leaves (splat_orphans)"),
+    counter("C_ORPHAN_TOTAL", 45, "orphans", "orphan records written (splat_orphans)"),
+    counter("C_OVERFLOW_ORPHANS", 46, "overflow_orphans", "orphan records that found no room (splat_orphans)"),
+    counter("C_ORPHAN_CORNERS", 47, "orphan_corners", "landed corners of the orphan records (splat_orphans)"),
     SPLIT_HISTOGRAM,
 ];
 
@@ -135,8 +139,11 @@ pub const COUNTER_DOCS: &[CounterDoc] = &[
     CounterDoc { name: "hulls_prism", doc: "beams whose hull is Ernst et al.'s bounding prism (hull = prism, or a tight hull with no unique choice of triangle at an edge)" },
     CounterDoc { name: "hulls_tight", doc: "beams whose hull is the paper's tight six-triangle hull (hull = tight and a unique choice at every edge); hulls_tight + hulls_prism = beams" },
     CounterDoc { name: "levels_run", doc: "levels of the grid the generate pass decided on, the unrefined grid included (levels + 1)" },
+    CounterDoc { name: "orphan_corners", doc: "with splat_orphans: corners of the orphan records that landed on a receiver, each drawn as a one-pixel point of a third of its triangle's flux" },
+    CounterDoc { name: "orphans", doc: "with splat_orphans: orphan records written, one per leaf and light-path family that emits no beam (its corners part ways) while some corner landed; without splat_orphans that light is lost" },
     CounterDoc { name: "overflow_beams", doc: "beams that found no room in the beam buffer (max_beams) and were not drawn: light missing from the image; 0 in a good run" },
     CounterDoc { name: "overflow_candidates", doc: "children of splits that found no room in the next level's candidate list (max_beams) and were not refined further: light missing from the image; 0 in a good run" },
+    CounterDoc { name: "overflow_orphans", doc: "with splat_orphans: orphan records that found no room (as many slots as max_beams) and were not drawn: light missing from the image; 0 in a good run" },
     CounterDoc { name: "splits_camera", doc: "triangles split by the camera criterion: the beam's base spans more than split_camera_px pixels where its central ray passes closest to the eye (0 in static-grid, which never splits; a triangle split for several reasons counts in each splits_*)" },
     CounterDoc { name: "splits_discontinuity", doc: "triangles split by the discontinuity criterion: corners partly missing the generators, on different paths, with normals or depths that differ too much, or an edge midpoint whose light lands off the linear prediction (0 in static-grid)" },
     CounterDoc { name: "splits_deferred", doc: "splits the oracle asked for that the beam budget left undone: the triangle stayed a leaf because splits of higher priority used the budget (0 without beam_budget; counted also in splits_*)" },

@@ -12,11 +12,19 @@
 @group(1) @binding(9) var<storage, read_write> offsets: array<vec2<u32>>;
 @group(1) @binding(10) var<storage, read_write> control: array<atomic<u32>>;
 @group(1) @binding(11) var<storage, read_write> beams: array<Beam>;
-// Indirect arguments: words 0..3 the dispatch over candidates, 4..7 the hull draw.
+// With splat_orphans (u.splat_orphans = 1; without it these are placeholders no kernel
+// touches): per candidate, x: the families its leaf traced but emits no beam for while
+// some corner of theirs landed (bit f: family f), y: the offset of its first orphan
+// record among the level's (one buffer: a compute stage binds at most 16); and the
+// records (as many slots as beams: max_beams).
+@group(1) @binding(12) var<storage, read_write> orphan_slots: array<vec2<u32>>;
+@group(1) @binding(13) var<storage, read_write> orphans: array<Orphan>;
+// Indirect arguments: words 0..3 the dispatch over candidates, 4..7 the hull draw,
+// 8..11 the orphan point draw.
 // A group of its own, bound to the real buffer only for the kernels that write it
 // (init_grid, advance, finalize): a buffer cannot be storage and indirect in the same
 // dispatch, so the indirect ones (decide, emit) and scan see a placeholder here.
-@group(2) @binding(0) var<storage, read_write> indirect_args: array<u32, 8>;
+@group(2) @binding(0) var<storage, read_write> indirect_args: array<u32, 12>;
 
 // The words of `control` (C_LEVEL, C_COUNT, ...) are declared once in control.rs,
 // which prepends their constants to this file.
@@ -162,24 +170,38 @@ fn lands(k: Corners) -> bool {
     return u.sigma_t.w > 0.5 || k.p[0].end_object != NONE;
 }
 
+// Some corner's path is valid and reaches a receiver: a family that emits no beam
+// still has light there (splat_orphans draws it as points).
+fn any_landed(k: Corners) -> bool {
+    var landed = false;
+    for (var i = 0u; i < 3u; i++) {
+        landed = landed || (k.p[i].valid && k.p[i].end_object != NONE);
+    }
+    return landed;
+}
+
 // Families a leaf emits: bit 0 the main path, bit 1 the Fresnel reflection, bit
 // FAMILY_INTERNAL + j - 1 the light reflected j times inside the first object
 // (`bounces`; Sect. 6 makes the reflected beam on the same refined grid, and so are
-// these: the split oracle looks at the main path only), and how many consistent
-// families meet no receiver (the caller counts them where the triangle is a leaf).
+// these: the split oracle looks at the main path only), how many consistent
+// families meet no receiver (the caller counts them where the triangle is a leaf), and
+// the orphans: the families traced that emit no beam while some corner landed.
 struct Leaf {
     mask: u32,
     no_receiver: u32,
+    orphans: u32,
 }
 
 fn leaf_mask(c: Candidate, main: Corners) -> Leaf {
-    var leaf = Leaf(0u, 0u);
+    var leaf = Leaf(0u, 0u, 0u);
     if consistent(main) && corners_geometry(main).ok {
         if lands(main) {
             leaf.mask |= 1u;
         } else {
             leaf.no_receiver += 1u;
         }
+    } else if any_landed(main) {
+        leaf.orphans |= 1u;
     }
     let first = u.specular[specular_slot_of(main.p[0].first_object)];
     if u.reflections == 1u && main.p[0].valid && first.kind == MAT_DIELECTRIC
@@ -192,6 +214,8 @@ fn leaf_mask(c: Candidate, main: Corners) -> Leaf {
             } else {
                 leaf.no_receiver += 1u;
             }
+        } else if any_landed(refl) {
+            leaf.orphans |= 2u;
         }
     }
     let slot = main.p[0].first_slot;
@@ -206,6 +230,8 @@ fn leaf_mask(c: Candidate, main: Corners) -> Leaf {
                 } else {
                     leaf.no_receiver += 1u;
                 }
+            } else if any_landed(inner) {
+                leaf.orphans |= 1u << family;
             }
         }
     }
@@ -449,6 +475,9 @@ fn decide(@builtin(global_invocation_id) id: vec3<u32>) {
             atomicAdd(&control[C_LEAF_COST], beams);
             atomicAdd(&control[C_SPLIT_HISTOGRAM + bin], max(beams, 1u));
             store_size(id.x, s.size_px);
+            if u.splat_orphans == 1u {
+                orphan_slots[id.x].x = leaf.orphans;
+            }
             actions[id.x] = ACTION_WANT | (bin << ACTION_BIN_SHIFT)
                 | (drop_reason(k, leaf.mask) << ACTION_DROP_SHIFT)
                 | (min(leaf.no_receiver, 15u) << ACTION_NO_RECEIVER_SHIFT) | leaf.mask;
@@ -456,6 +485,9 @@ fn decide(@builtin(global_invocation_id) id: vec3<u32>) {
         }
     }
     let leaf = leaf_mask(c, k);
+    if u.splat_orphans == 1u {
+        orphan_slots[id.x].x = leaf.orphans;
+    }
     count_drop(drop_reason(k, leaf.mask), leaf.no_receiver);
     if ranked {
         atomicAdd(&control[C_LEAF_COST], countOneBits(leaf.mask));
@@ -509,46 +541,68 @@ fn resolve(a: u32) -> u32 {
 const SCAN_THREADS: u32 = 256u;
 var<workgroup> scan_children: array<u32, 256>;
 var<workgroup> scan_beams: array<u32, 256>;
+var<workgroup> scan_orphans: array<u32, 256>;
 
-fn action_counts(a: u32) -> vec2<u32> {
+// Children, beams and orphan records candidate i makes.
+fn action_counts(i: u32) -> vec3<u32> {
+    let a = resolve(actions[i]);
     if a == ACTION_SPLIT {
-        return vec2<u32>(4u, 0u);
+        return vec3<u32>(4u, 0u, 0u);
     }
-    return vec2<u32>(0u, countOneBits(a));
+    var orphan_records = 0u;
+    if u.splat_orphans == 1u {
+        orphan_records = countOneBits(orphan_slots[i].x);
+    }
+    return vec3<u32>(0u, countOneBits(a), orphan_records);
 }
 
-// One workgroup: exclusive prefix sums of children and beams over the candidates, in
-// candidate order (deterministic slots), with overflow counted, never silent.
+// One workgroup: exclusive prefix sums of children, beams and orphan records over the
+// candidates, in candidate order (deterministic slots), with overflow counted, never
+// silent.
 @compute @workgroup_size(256)
 fn scan(@builtin(local_invocation_index) lid: u32) {
     let n = atomicLoad(&control[C_COUNT]);
     let chunk = (n + SCAN_THREADS - 1u) / SCAN_THREADS;
     let start = min(lid * chunk, n);
     let end = min(start + chunk, n);
-    var sum = vec2<u32>(0u);
+    var sum = vec3<u32>(0u);
     for (var i = start; i < end; i++) {
-        sum += action_counts(resolve(actions[i]));
+        sum += action_counts(i);
     }
     scan_children[lid] = sum.x;
     scan_beams[lid] = sum.y;
+    scan_orphans[lid] = sum.z;
     workgroupBarrier();
     // Hillis-Steele inclusive scan over the 256 partial sums.
     for (var step = 1u; step < SCAN_THREADS; step <<= 1u) {
-        var add = vec2<u32>(0u);
+        var add = vec3<u32>(0u);
         if lid >= step {
-            add = vec2<u32>(scan_children[lid - step], scan_beams[lid - step]);
+            add = vec3<u32>(scan_children[lid - step], scan_beams[lid - step], scan_orphans[lid - step]);
         }
         workgroupBarrier();
         scan_children[lid] += add.x;
         scan_beams[lid] += add.y;
+        scan_orphans[lid] += add.z;
         workgroupBarrier();
     }
-    var running = vec2<u32>(scan_children[lid], scan_beams[lid]) - sum;
+    var running = vec3<u32>(scan_children[lid], scan_beams[lid], scan_orphans[lid]) - sum;
     for (var i = start; i < end; i++) {
-        offsets[i] = running;
-        running += action_counts(resolve(actions[i]));
+        offsets[i] = running.xy;
+        if u.splat_orphans == 1u {
+            orphan_slots[i].y = running.z;
+        }
+        running += action_counts(i);
     }
     if lid == SCAN_THREADS - 1u {
+        if u.splat_orphans == 1u {
+            // Orphan records have as many slots as beams (max_beams).
+            let orphan_base = atomicLoad(&control[C_ORPHAN_TOTAL]);
+            let new_orphans = scan_orphans[lid];
+            let orphan_total = min(orphan_base + new_orphans, u.max_beams);
+            atomicAdd(&control[C_OVERFLOW_ORPHANS], orphan_base + new_orphans - orphan_total);
+            atomicStore(&control[C_ORPHAN_BASE], orphan_base);
+            atomicStore(&control[C_ORPHAN_TOTAL], orphan_total);
+        }
         let children = scan_children[lid];
         let new_beams = scan_beams[lid];
         let capacity = u.max_beams;
@@ -811,6 +865,41 @@ fn emit(@builtin(global_invocation_id) id: vec3<u32>) {
         }
         slot += 1u;
     }
+    if u.splat_orphans == 1u {
+        let dropped = orphan_slots[id.x].x;
+        var orphan_slot = atomicLoad(&control[C_ORPHAN_BASE]) + orphan_slots[id.x].y;
+        for (var family = 0u; family < FAMILY_INTERNAL + u.bounces; family++) {
+            if (dropped & (1u << family)) == 0u {
+                continue;
+            }
+            if orphan_slot < u.max_beams {
+                write_orphan(orphan_slot, c, trace_corners(c, family));
+            }
+            orphan_slot += 1u;
+        }
+    }
+}
+
+// The corners of a family the leaf emits no beam for: each landed corner keeps a third
+// of the triangle's flux (the vertex rule of quadrature over it), so the light a
+// silhouette or a fold tears off the beams still reaches the receiver, as points.
+fn write_orphan(slot: u32, c: Candidate, k: Corners) {
+    let share = source_measure(c.uv01.xy, c.uv01.zw, c.uv2_level.xy) / 3.0;
+    var o: Orphan;
+    o.receiver = vec4<u32>(NONE);
+    var landed = 0u;
+    for (var i = 0u; i < 3u; i++) {
+        let p = k.p[i];
+        if p.valid && p.end_object != NONE {
+            o.point[i] = vec4<f32>(p.origin + p.dir * p.t_end, p.t_end);
+            o.dir[i] = vec4<f32>(p.dir, 0.0);
+            o.flux[i] = vec4<f32>(p.weight * share, 0.0);
+            o.receiver[i] = p.end_object;
+            landed += 1u;
+        }
+    }
+    orphans[slot] = o;
+    atomicAdd(&control[C_ORPHAN_CORNERS], landed);
 }
 
 // Moves to the next level's list.
@@ -822,11 +911,17 @@ fn advance() {
     set_dispatch(next);
 }
 
-// Indirect draw of every beam's hull: 8 triangles, 24 vertices per beam.
+// Indirect draws: every beam's hull (8 triangles, 24 vertices per beam) and, with
+// splat_orphans, every orphan corner (3 points per record).
 @compute @workgroup_size(1)
 fn finalize() {
     indirect_args[4] = 24u * atomicLoad(&control[C_BEAM_TOTAL]);
     indirect_args[5] = 1u;
     indirect_args[6] = 0u;
     indirect_args[7] = 0u;
+    // One point per orphan corner (a corner that did not land is culled).
+    indirect_args[8] = 3u * atomicLoad(&control[C_ORPHAN_TOTAL]);
+    indirect_args[9] = 1u;
+    indirect_args[10] = 0u;
+    indirect_args[11] = 0u;
 }

@@ -13,6 +13,9 @@ use crate::{BeamConfig, HullKind, MAX_SPECULAR, Tracer};
 pub(crate) const CANDIDATE_BYTES: u64 = 32;
 /// Bytes of one `Beam`.
 pub(crate) const BEAM_BYTES: u64 = std::mem::size_of::<BeamRecord>() as u64;
+/// Bytes of one `Orphan` (types.wgsl): three corners' points, directions and flux
+/// shares, and their receivers.
+pub(crate) const ORPHAN_BYTES: u64 = 160;
 
 /// Mirrors `SpecularSlot` in types.wgsl: one caustic generator.
 #[repr(C)]
@@ -59,7 +62,8 @@ pub(crate) struct BeamUniforms {
     exact_trace: u32,
     split_hit_rel: f32,
     beam_budget: u32,
-    _pad: [u32; 3],
+    splat_orphans: u32,
+    _pad: [u32; 2],
 }
 
 /// Mirrors `FilterUniforms` in filter.wgsl.
@@ -269,7 +273,8 @@ impl BeamUniforms {
             exact_trace: u32::from(b.tracer == Tracer::Bvh),
             split_hit_rel: r.split_hit_rel as f32,
             beam_budget: if r.levels > 0 { r.beam_budget } else { 0 },
-            _pad: [0; 3],
+            splat_orphans: u32::from(b.splat_orphans),
+            _pad: [0; 2],
         }
     }
 }
@@ -325,6 +330,7 @@ mod tests {
                 exact_trace,
                 split_hit_rel,
                 beam_budget,
+                splat_orphans,
             }
         );
         assert_wgsl_layout!(
@@ -348,9 +354,12 @@ mod tests {
     }
 
     #[test]
-    fn candidate_size_matches_its_wgsl() {
+    fn candidate_and_orphan_sizes_match_their_wgsl() {
         let (_, span) = caustics_gpu::layout::wgsl_struct_layout(&generate_source(), "Candidate")
             .unwrap_or_else(|e| panic!("{e}"));
         assert_eq!(u64::from(span), CANDIDATE_BYTES);
+        let (_, span) = caustics_gpu::layout::wgsl_struct_layout(&generate_source(), "Orphan")
+            .unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(u64::from(span), ORPHAN_BYTES);
     }
 }

@@ -69,11 +69,19 @@
 //!   analytic shapes (`caustics_gpu::triangle_bvh`), with the adjoint shading-normal
 //!   factor at each event (Veach 1997, §5.3) as the reference; the light G-buffer and
 //!   impostor passes are then not recorded.
+//! - a leaf whose corners part ways (a silhouette, a fold, different receivers) emits
+//!   no beam for that family and its light is lost, as in the paper (refinement only
+//!   narrows where). `splat_orphans` writes such a family's landed corners as orphan
+//!   records (a third of the triangle's flux each, in candidate order beside the
+//!   beams' prefix sum) and draws them as one-pixel points into the raw surface
+//!   caustic before the filter (`orphans.wgsl`); in a medium their in-scattered light
+//!   stays lost.
 //!
 //! Passes (names `<method>/<pass>`): `light_gbuffer`, `impostors`, `generate` (compute:
 //! `init_grid`, then per level `decide`, `budget` (with a beam budget), `scan`, `emit`,
 //! `advance`, then `finalize`),
-//! `rasterize` (the hulls, one indirect draw) and `surface_filter`.
+//! `rasterize` (the hulls, one indirect draw), `orphan_points` (with `splat_orphans`,
+//! one indirect draw) and `surface_filter`.
 
 pub mod config;
 mod control;
@@ -93,13 +101,14 @@ pub use config::{BeamConfig, BeamParams, HullKind, MAX_BOUNCES, MAX_LEVELS, Refi
 use control::CONTROL_WORDS;
 pub use control::COUNTER_DOCS;
 pub use gpu_types::BeamRecord;
-use gpu_types::{BEAM_BYTES, BeamUniforms, CANDIDATE_BYTES, FilterUniforms, Slot};
+use gpu_types::{BEAM_BYTES, BeamUniforms, CANDIDATE_BYTES, FilterUniforms, ORPHAN_BYTES, Slot};
 
 const TYPES_WGSL: &str = include_str!("types.wgsl");
 const PATH_WGSL: &str = include_str!("path.wgsl");
 const GENERATE_WGSL: &str = include_str!("generate.wgsl");
 const RASTERIZE_WGSL: &str = include_str!("rasterize.wgsl");
 const FILTER_WGSL: &str = include_str!("filter.wgsl");
+const ORPHANS_WGSL: &str = include_str!("orphans.wgsl");
 
 /// types.wgsl after the limits it sizes its arrays and counters with.
 fn types_wgsl() -> String {
@@ -125,6 +134,11 @@ pub fn generate_source() -> String {
 /// Hull rasterization with the per-fragment beam intersection.
 pub fn rasterize_source() -> String {
     shader::compose_method(&format!("{}\n{RASTERIZE_WGSL}", types_wgsl()))
+}
+
+/// The orphan corners as points (`splat_orphans`).
+pub fn orphans_source() -> String {
+    shader::compose_method(&format!("{}\n{ORPHANS_WGSL}", types_wgsl()))
 }
 
 /// The surface-caustic low-pass filter.
@@ -189,6 +203,8 @@ pub fn check_scene(scene: &Scene) -> Result<(), Unsupported> {
 
 /// Byte offset of the hull draw's arguments in the indirect-arguments buffer.
 const DRAW_ARGS_OFFSET: u64 = 16;
+/// Byte offset of the orphan point draw's arguments there.
+const ORPHAN_DRAW_ARGS_OFFSET: u64 = 32;
 
 /// The beam pipeline bound to one scene.
 pub struct BeamMethod {
@@ -201,6 +217,8 @@ pub struct BeamMethod {
     /// Group 2 of `generate`: the indirect arguments, for the kernels that write them.
     args: wgpu::BindGroup,
     rasterize: RasterPass,
+    /// With `splat_orphans`: the landed corners of the families leaves drop, as points.
+    orphan_points: Option<RasterPass>,
     surface_filter: RasterPass,
     pass_names: PassNames,
     bytes: u64,
@@ -220,6 +238,10 @@ struct Buffers {
     actions: wgpu::Buffer,
     offsets: wgpu::Buffer,
     beams: wgpu::Buffer,
+    /// `splat_orphans`' per-candidate family mask and record offset, and the records
+    /// (16-byte placeholders without it).
+    orphan_slots: wgpu::Buffer,
+    orphans: wgpu::Buffer,
     control: wgpu::Buffer,
     control_init: wgpu::Buffer,
     indirect_args: wgpu::Buffer,
@@ -253,6 +275,8 @@ impl Buffers {
             })
         };
         let cap = config.beams.max_beams as u64;
+        // Orphan slots only where they are written.
+        let orphan_cap = if config.beams.splat_orphans { cap } else { 0 };
         let none = wgpu::BufferUsages::empty();
         let copy = wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC;
         let filter = FilterUniforms::new(config.beams.surface_filter_px);
@@ -276,13 +300,16 @@ impl Buffers {
             actions: storage("beam actions", cap * 4, none),
             offsets: storage("beam offsets", cap * 8, none),
             beams: storage("beams", cap * BEAM_BYTES, wgpu::BufferUsages::COPY_SRC),
+            orphan_slots: storage("beam orphan slots", orphan_cap * 8, none),
+            // At least one record: the shader declares an array of them.
+            orphans: storage("beam orphans", orphan_cap.max(1) * ORPHAN_BYTES, none),
             control: storage("beam control", (CONTROL_WORDS * 4) as u64, copy),
             control_init: init(
                 "beam control reset",
                 bytemuck::cast_slice(&[0u32; CONTROL_WORDS]),
                 wgpu::BufferUsages::COPY_SRC,
             ),
-            indirect_args: storage("beam indirect args", 32, wgpu::BufferUsages::INDIRECT),
+            indirect_args: storage("beam indirect args", 48, wgpu::BufferUsages::INDIRECT),
             filter_uniforms: init(
                 "beam filter uniforms",
                 bytemuck::bytes_of(&filter),
@@ -301,6 +328,8 @@ impl Buffers {
                 &self.actions,
                 &self.offsets,
                 &self.beams,
+                &self.orphan_slots,
+                &self.orphans,
                 &self.control,
                 &self.control_init,
                 &self.indirect_args,
@@ -391,6 +420,8 @@ impl BeamMethod {
                     ("offsets", &b.offsets),
                     ("control", &b.control),
                     ("beams", &b.beams),
+                    ("orphan_slots", &b.orphan_slots),
+                    ("orphans", &b.orphans),
                 ],
             )
             .bind(
@@ -434,6 +465,24 @@ impl BeamMethod {
             .counted()
             .build()?;
 
+        let orphan_points = if config.beams.splat_orphans {
+            let shader = Shader::new(ctx, "beams orphans.wgsl", orphans_source())?;
+            Some(
+                RasterPass::builder(ctx, &format!("{name}/orphan_points"), &shader, "vs_orphan")
+                    .frame(renderer)
+                    .bind(1, &[("u", &b.uniforms), ("orphans", &b.orphans)])
+                    .primitive(wgpu::PrimitiveState {
+                        topology: wgpu::PrimitiveTopology::PointList,
+                        ..Default::default()
+                    })
+                    .fragment("fs_orphan", &[Some(additive_hdr_target())])
+                    .counted()
+                    .build()?,
+            )
+        } else {
+            None
+        };
+
         let shader = Shader::new(ctx, "beams filter.wgsl", filter_source())?;
         let surface_filter = RasterPass::fullscreen(
             ctx,
@@ -462,6 +511,7 @@ impl BeamMethod {
             generate,
             args,
             rasterize,
+            orphan_points,
             surface_filter,
             pass_names: PassNames {
                 light_gbuffer: format!("{name}/light_gbuffer"),
@@ -529,10 +579,16 @@ fn reserve_beam_buffers(ctx: &GpuContext, config: &BeamConfig) -> Result<Reserva
         cap * BEAM_BYTES,
         &raise,
     )?;
-    // Both candidate lists, the actions, the offsets and the beams.
+    // Both candidate lists, the actions, the offsets and the beams; with splat_orphans
+    // the orphan slots and records too.
+    let orphan_bytes = if config.beams.splat_orphans {
+        8 + ORPHAN_BYTES
+    } else {
+        0
+    };
     ctx.memory.reserve(
         &format!("max_beams: the beam generation buffers ({cap} beams)"),
-        cap * (2 * CANDIDATE_BYTES + 4 + 8 + BEAM_BYTES),
+        cap * (2 * CANDIDATE_BYTES + 4 + 8 + BEAM_BYTES + orphan_bytes),
         &raise,
     )
 }
@@ -632,6 +688,12 @@ impl CausticsMethod for BeamMethod {
             let mut pass = self.rasterize.begin(frame, &attachments, None)?;
             pass.draw_indirect(&b.indirect_args, DRAW_ARGS_OFFSET);
         }
+        if let Some(orphan_points) = &self.orphan_points {
+            // Into the raw surface caustic, before the filter, beside the beams' light.
+            let attachments = [load_attachment(&b.raw_surface.view)];
+            let mut pass = orphan_points.begin(frame, &attachments, None)?;
+            pass.draw_indirect(&b.indirect_args, ORPHAN_DRAW_ARGS_OFFSET);
+        }
         let attachments = [load_attachment(&renderer.targets().surface.view)];
         let mut pass = self.surface_filter.begin(frame, &attachments, None)?;
         pass.draw_fullscreen();
@@ -642,6 +704,13 @@ impl CausticsMethod for BeamMethod {
         let c = self.read_control(ctx)?;
         let mut out =
             control::counters(&c, self.config.refinement.levels, self.config.beams.bounces);
+        // The orphans' counters only where they are drawn: the default's counters are
+        // the paper's (and the regression baselines').
+        if !self.config.beams.splat_orphans {
+            for name in ["orphans", "overflow_orphans", "orphan_corners"] {
+                out.remove(name);
+            }
+        }
         // Derived: 8 hull triangles per beam, 2 base triangles per grid cell.
         out.insert(
             "hull_triangles".into(),
@@ -665,6 +734,7 @@ mod tests {
     fn shaders_validate() -> Result<(), String> {
         shader::validate_wgsl("beams generate.wgsl", &generate_source())?;
         shader::validate_wgsl("beams rasterize.wgsl", &rasterize_source())?;
+        shader::validate_wgsl("beams orphans.wgsl", &orphans_source())?;
         shader::validate_wgsl("beams filter.wgsl", &filter_source())
     }
 }

@@ -200,13 +200,6 @@ fn receiver_layer() -> i32 {
     return i32(6u * u.specular_count);
 }
 
-fn extinction(length_m: f32) -> vec3<f32> {
-    if u.sigma_t.w < 0.5 {
-        return vec3<f32>(1.0);
-    }
-    return exp(-u.sigma_t.xyz * length_m);
-}
-
 // Where a vertex's light leaves its last specular surface.
 struct PathEnd {
     valid: bool,

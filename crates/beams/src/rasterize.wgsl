@@ -38,13 +38,6 @@ fn henyey_greenstein(cos_theta: f32, g: f32) -> f32 {
     return (1.0 - g * g) / (4.0 * PI * d * sqrt(d));
 }
 
-fn extinction_cam(length_m: f32) -> vec3<f32> {
-    if u.sigma_t.w < 0.5 {
-        return vec3<f32>(1.0);
-    }
-    return exp(-u.sigma_t.xyz * length_m);
-}
-
 // Irradiance on the plane parallel to the base at height y, for barycentrics bc:
 // Φ(bc) / A(y), with A clamped at A(0)/max_focus (Sect. 5.2; a point sample of a
 // focus is singular).
@@ -86,7 +79,7 @@ fn fs_beam(in: VsOut) -> BeamOut {
                     // E on the receiver = (Φ/A) · |d·n_r| / |d·n| (d·n = 1/|dp|).
                     let e = parallel_irradiance(b, bc, y) * cos_r * length(dp);
                     let albedo = materials[g.material].color.xyz;
-                    let ext = extinction_cam(y * length(dp) + t_surface);
+                    let ext = extinction(y * length(dp) + t_surface);
                     out.surface = vec4<f32>(albedo * INV_PI * e * ext, 0.0);
                 }
             }
@@ -157,7 +150,7 @@ fn fs_beam(in: VsOut) -> BeamOut {
             let e_perp = parallel_irradiance(b, bc, y) * length(dp);
             let phase = henyey_greenstein(dot(d, -r), u.sigma_s_g.w);
             var l = (t_out - t_in) * u.sigma_s_g.xyz * phase * e_perp
-                * extinction_cam(y * length(dp) + tm);
+                * extinction(y * length(dp) + tm);
             if u.soft_depth > 0.0 {
                 // Soft-particle fade (Sect. 5.2) towards the surface behind the segment.
                 l *= clamp((t_surface - tm) / u.soft_depth, 0.0, 1.0);

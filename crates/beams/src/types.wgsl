@@ -71,6 +71,9 @@ struct BeamUniforms {
     split_hit_rel: f32,
     // Beams to aim for: the splits of a level are ranked by priority (0 = every split).
     beam_budget: u32,
+    // 1: the landed corners of the families a leaf drops are written as orphan records
+    // and drawn as points (`splat_orphans`).
+    splat_orphans: u32,
 }
 
 // A triangle of the projected grid in the light's uv space: uv01 corners 0 and 1,
@@ -100,6 +103,30 @@ struct Beam {
     hull: array<vec4<f32>, 6>,
     // 24 4-bit point indices (8 outward triangles); w: 1 tight, 0 prism.
     tris: vec4<u32>,
+}
+
+// The corners of one light-path family of a leaf that emits no beam for it (its
+// corners part ways), with `splat_orphans`: each landed corner is drawn as a one-pixel
+// point of a third of the triangle's flux (orphans.wgsl).
+struct Orphan {
+    // xyz: where corner i lands (m); w: its path length from the beam's start (m).
+    point: array<vec4<f32>, 3>,
+    // xyz: the unit direction its light arrives along.
+    dir: array<vec4<f32>, 3>,
+    // rgb: its share of the triangle's flux (W): the corner's weight × the source
+    // measure of the triangle / 3.
+    flux: array<vec4<f32>, 3>,
+    // xyz: the receiver corner i landed on (NONE: it did not land).
+    receiver: vec4<u32>,
+}
+
+// Extinction over `length_m` of the scene's medium (1 without one). Every pass that
+// includes this file declares the uniforms `u`.
+fn extinction(length_m: f32) -> vec3<f32> {
+    if u.sigma_t.w < 0.5 {
+        return vec3<f32>(1.0);
+    }
+    return exp(-u.sigma_t.xyz * length_m);
 }
 
 // Beam-space frame of a base triangle and edge directions.

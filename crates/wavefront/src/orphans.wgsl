@@ -54,21 +54,9 @@ fn vs_orphan(@builtin(vertex_index) vi: u32) -> OrphanOut {
 fn fs_orphan(i: OrphanOut) -> @location(0) vec4<f32> {
     count_fragment(i.clip);
     let g = gbuffer_sample(vec2<u32>(i.clip.xy));
-    if !g.hit || g.object != i.receiver {
+    let radiance = point_splat_radiance(g, i.new_pos, i.flux_w, i.receiver, i.side, sp.tolerance);
+    if all(radiance == vec3<f32>(0.0)) {
         discard;
     }
-    // The point is anywhere in the pixel, not at its centre: it must lie on the
-    // receiver's tangent plane there (within the splat pass's tolerance), not at the
-    // G-buffer's point.
-    let to_eye = frame.eye.xyz - g.position;
-    if abs(dot(g.position - i.new_pos, g.normal)) > sp.tolerance * length(to_eye) {
-        discard;
-    }
-    let camera_side = select(-1.0, 1.0, dot(to_eye, g.normal) >= 0.0);
-    if camera_side != i.side {
-        discard;
-    }
-    let irradiance = i.flux_w / pixel_footprint_m2(g.position, g.normal);
-    let albedo = materials[g.material].color.xyz;
-    return vec4<f32>(albedo * INV_PI * irradiance, 1.0);
+    return vec4<f32>(radiance, 1.0);
 }

@@ -78,3 +78,27 @@ fn pixel_footprint_m2(position: vec3<f32>, normal: vec3<f32>) -> f32 {
     let cos_surface = max(abs(dot(w, normal)), 1e-4);
     return side * side * cos_axis * cos_axis * cos_axis * dist * dist / cos_surface;
 }
+
+// The radiance (W m⁻² sr⁻¹) a point of light adds to the pixel it is drawn into: flux_w
+// (W) landed at `p` on object `receiver`, arriving on the `side` of the object's
+// stored normal (+1 the side it points to), seen in the pixel's G-buffer sample `g`.
+// A one-pixel point is an irradiance Φ / (the pixel's footprint), so its energy is
+// kept wherever in the pixel it lands (the light of a corner a method could not join
+// into a triangle or beam). Zero where the pixel shows another object or the other side,
+// or where `p` is off the pixel's tangent plane by more than tolerance × the distance
+// to the eye (the point is anywhere in the pixel, not at its centre).
+fn point_splat_radiance(g: GSample, p: vec3<f32>, flux_w: vec3<f32>, receiver: u32, side: f32, tolerance: f32) -> vec3<f32> {
+    if !g.hit || g.object != receiver {
+        return vec3<f32>(0.0);
+    }
+    let to_eye = frame.eye.xyz - g.position;
+    if abs(dot(g.position - p, g.normal)) > tolerance * length(to_eye) {
+        return vec3<f32>(0.0);
+    }
+    let camera_side = select(-1.0, 1.0, dot(to_eye, g.normal) >= 0.0);
+    if camera_side != side {
+        return vec3<f32>(0.0);
+    }
+    let albedo = materials[g.material].color.xyz;
+    return albedo * INV_PI * flux_w / pixel_footprint_m2(g.position, g.normal);
+}
