@@ -471,10 +471,7 @@ impl BeamMethod {
                 RasterPass::builder(ctx, &format!("{name}/orphan_points"), &shader, "vs_orphan")
                     .frame(renderer)
                     .bind(1, &[("u", &b.uniforms), ("orphans", &b.orphans)])
-                    .primitive(wgpu::PrimitiveState {
-                        topology: wgpu::PrimitiveTopology::PointList,
-                        ..Default::default()
-                    })
+                    .points()
                     .fragment("fs_orphan", &[Some(additive_hdr_target())])
                     .counted()
                     .build()?,

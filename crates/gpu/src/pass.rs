@@ -995,6 +995,16 @@ impl<'a> RasterPassBuilder<'a> {
         self
     }
 
+    /// One-pixel points (a point list, no culling): light that a method could not join
+    /// into a triangle or a beam, drawn where it landed (shade it with frame.wgsl's
+    /// `point_splat_radiance`).
+    pub fn points(self) -> Self {
+        self.primitive(wgpu::PrimitiveState {
+            topology: wgpu::PrimitiveTopology::PointList,
+            ..Default::default()
+        })
+    }
+
     /// Depth/stencil state.
     pub fn depth_stencil(mut self, state: wgpu::DepthStencilState) -> Self {
         self.spec.depth_stencil = Some(state);

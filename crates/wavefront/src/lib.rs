@@ -350,10 +350,7 @@ impl Wavefront {
                 RasterPass::builder(ctx, "wavefront/orphan_points", &shader, "vs_orphan")
                     .frame(renderer)
                     .caller_group(1)
-                    .primitive(wgpu::PrimitiveState {
-                        topology: wgpu::PrimitiveTopology::PointList,
-                        ..Default::default()
-                    })
+                    .points()
                     .fragment("fs_orphan", &[Some(additive_hdr_target())])
                     .counted()
                     .build()?,
