@@ -62,10 +62,17 @@ const TRACE_WGSL: &str = include_str!("trace.wgsl");
 const CLASSIFY_WGSL: &str = include_str!("classify.wgsl");
 const SPLAT_WGSL: &str = include_str!("splat.wgsl");
 const ORPHANS_WGSL: &str = include_str!("orphans.wgsl");
+/// Group 1 of the splat and orphans passes (one sheet's drawing inputs).
+const SHEET_DRAW_WGSL: &str = include_str!("sheet_draw.wgsl");
 
 /// A pass's full WGSL: shared GPU files, wavefront's types, then the pass.
 fn pass_source(pass: &str) -> String {
     shader::compose_method(&format!("{TYPES_WGSL}\n{pass}"))
+}
+
+/// A camera-side pass (splat, orphans): its bindings of one sheet, then the pass.
+fn draw_source(pass: &str) -> String {
+    pass_source(&format!("{SHEET_DRAW_WGSL}\n{pass}"))
 }
 
 /// The trace pass also traces rays against the scene's triangle BVH (group 2).
@@ -337,7 +344,7 @@ impl Wavefront {
             .kernels(&["classify_triangles"])
             .build()?;
         // Folded triangles face away: both windings count (the builder culls nothing).
-        let shader = Shader::new(ctx, "wavefront splat.wgsl", pass_source(SPLAT_WGSL))?;
+        let shader = Shader::new(ctx, "wavefront splat.wgsl", draw_source(SPLAT_WGSL))?;
         let splat = RasterPass::builder(ctx, "wavefront/splat", &shader, "vs_splat")
             .frame(renderer)
             .caller_group(1)
@@ -345,7 +352,7 @@ impl Wavefront {
             .counted()
             .build()?;
         let orphans = if params.splat_orphans {
-            let shader = Shader::new(ctx, "wavefront orphans.wgsl", pass_source(ORPHANS_WGSL))?;
+            let shader = Shader::new(ctx, "wavefront orphans.wgsl", draw_source(ORPHANS_WGSL))?;
             Some(
                 RasterPass::builder(ctx, "wavefront/orphan_points", &shader, "vs_orphan")
                     .frame(renderer)
@@ -596,25 +603,16 @@ impl Sheet {
                 ("counters", groups.triangle_counts),
             ],
         )?;
-        let splat_group = groups.splat.bind(
-            device,
-            &[
-                ("sp", &splat_params),
-                ("traced", &traced),
-                ("triangles", triangles),
-                ("keep", &keep),
-            ],
-        )?;
+        // Both draw passes declare these in sheet_draw.wgsl.
+        let draw_entries: [(&str, &dyn caustics_gpu::pass::Bindable); 4] = [
+            ("sp", &splat_params),
+            ("traced", &traced),
+            ("triangles", triangles),
+            ("keep", &keep),
+        ];
+        let splat_group = groups.splat.bind(device, &draw_entries)?;
         let orphan_group = match groups.orphans {
-            Some(schema) => Some(schema.bind(
-                device,
-                &[
-                    ("sp", &splat_params),
-                    ("traced", &traced),
-                    ("triangles", triangles),
-                    ("keep", &keep),
-                ],
-            )?),
+            Some(schema) => Some(schema.bind(device, &draw_entries)?),
             None => None,
         };
         let bytes = [&trace_params, &splat_params, &traced, &keep]
@@ -734,8 +732,8 @@ mod tests {
     fn shaders_validate() -> Result<(), String> {
         shader::validate_wgsl("trace.wgsl", &trace_source())?;
         shader::validate_wgsl("classify.wgsl", &pass_source(CLASSIFY_WGSL))?;
-        shader::validate_wgsl("splat.wgsl", &pass_source(SPLAT_WGSL))?;
-        shader::validate_wgsl("orphans.wgsl", &pass_source(ORPHANS_WGSL))
+        shader::validate_wgsl("splat.wgsl", &draw_source(SPLAT_WGSL))?;
+        shader::validate_wgsl("orphans.wgsl", &draw_source(ORPHANS_WGSL))
     }
 
     /// Every counter `Wavefront::counters` reports has a doc.
@@ -777,7 +775,7 @@ mod tests {
                 reflect_mask
             }
         );
-        caustics_gpu::assert_wgsl_layout!(pass_source(SPLAT_WGSL), SplatParams { tolerance });
+        caustics_gpu::assert_wgsl_layout!(draw_source(SPLAT_WGSL), SplatParams { tolerance });
     }
 
     /// The sheets of a generator: transmitted light first, then j internal reflections

@@ -10,11 +10,6 @@
 // refractor few triangles are dropped; on a bumpy one, whose total internal
 // reflections speckle the wavefront, these points are a third of the caustic.
 
-@group(1) @binding(0) var<uniform> sp: SplatParams;
-@group(1) @binding(1) var<storage, read> traced: array<Traced>;
-@group(1) @binding(2) var<storage, read> triangles: array<u32>;
-@group(1) @binding(3) var<storage, read> keep: array<u32>;
-
 struct OrphanOut {
     @builtin(position) clip: vec4<f32>,
     @location(0) new_pos: vec3<f32>,

@@ -6,11 +6,6 @@
 // exact for the affine map over a triangle and needs no geometry shader. Overlapping
 // sheets (folds of the wavefront) add up through additive blending.
 
-@group(1) @binding(0) var<uniform> sp: SplatParams;
-@group(1) @binding(1) var<storage, read> traced: array<Traced>;
-@group(1) @binding(2) var<storage, read> triangles: array<u32>;
-@group(1) @binding(3) var<storage, read> keep: array<u32>;
-
 struct VsOut {
     @builtin(position) clip: vec4<f32>,
     @location(0) old_pos: vec3<f32>,
