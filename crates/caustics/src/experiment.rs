@@ -102,6 +102,12 @@ pub struct ExperimentFile {
     /// --score-grid`).
     #[serde(default = "default_score_grid")]
     pub score_grid: u32,
+    /// `score_grid` per scene name, for the scenes whose foci are narrower than
+    /// 1/`score_grid` of a pixel at the experiment's resolution: fixed offsets that far
+    /// apart miss such a focus every time and bias its flux low (README, "Scoring at the
+    /// reference's footprint"). Each name must be a scene the experiment renders.
+    #[serde(default)]
+    pub score_grid_scenes: BTreeMap<String, u32>,
     /// Photon budget of references that `reproduce` renders when the cache has none for
     /// a scene at the experiment's resolution. Absent: such runs are made without errors
     /// and the summary says so.
@@ -298,6 +304,9 @@ pub struct RunSpec {
     pub frames: u32,
     /// Warm-up frames.
     pub warmup: u32,
+    /// N of the scoring frame's N×N sub-pixel offsets: `score_grid`, or the scene's
+    /// entry in `score_grid_scenes`.
+    pub score_grid: u32,
 }
 
 impl RunSpec {
@@ -480,14 +489,18 @@ impl Experiment {
             ));
         }
         let max_grid = caustics_gpu::scoring::MAX_SCORE_GRID;
-        if def.score_grid == 0 || def.score_grid > max_grid {
-            return Err(invalid(
-                "score_grid",
-                format!(
-                    "expected an integer in 1..={max_grid}, got {}",
-                    def.score_grid
-                ),
-            ));
+        let grids = std::iter::once(("score_grid".to_owned(), def.score_grid)).chain(
+            def.score_grid_scenes
+                .iter()
+                .map(|(scene, g)| (format!("score_grid_scenes.{scene}"), *g)),
+        );
+        for (field, grid) in grids {
+            if grid == 0 || grid > max_grid {
+                return Err(invalid(
+                    &field,
+                    format!("expected an integer in 1..={max_grid}, got {grid}"),
+                ));
+            }
         }
         check_resolution(&def.resolution, "resolution", &invalid)?;
         if let Some(r) = &def.reference {
@@ -532,6 +545,11 @@ impl Experiment {
                 }
                 scene.camera.width = w;
                 scene.camera.height = h;
+                let score_grid = def
+                    .score_grid_scenes
+                    .get(&scene.name)
+                    .copied()
+                    .unwrap_or(def.score_grid);
                 if runs.len() + methods.len() * param_sets.len() > MAX_RUNS {
                     return Err(invalid(
                         &at("params"),
@@ -558,6 +576,7 @@ impl Experiment {
                             params: params.clone(),
                             frames,
                             warmup,
+                            score_grid,
                         };
                         if let Some(first) = seen.insert(spec.key(), g) {
                             return Err(invalid(
@@ -572,6 +591,16 @@ impl Experiment {
                     }
                 }
             }
+        }
+        if let Some(scene) = def
+            .score_grid_scenes
+            .keys()
+            .find(|name| !runs.iter().any(|r| &r.scene.name == *name))
+        {
+            return Err(invalid(
+                &format!("score_grid_scenes.{scene}"),
+                "no run of the experiment renders this scene".into(),
+            ));
         }
         if let Some(paper) = &def.paper {
             for (i, f) in paper.figures.iter().enumerate() {

@@ -281,7 +281,6 @@ fn reproduce_one(
         let dir = out.join(&rel);
         let expected = Expected {
             spec,
-            score_grid: e.def.score_grid,
             exposure: e.def.exposure,
             reference: crate::references::find(&args.references, &spec.scene)
                 .ok()
@@ -560,7 +559,7 @@ fn run_one(e: &Experiment, spec: &RunSpec, args: &ReproduceArgs, out: &Path) -> 
         out: out.join(&rel),
         adapter: args.adapter.clone(),
         exposure: e.def.exposure,
-        score_grid: e.def.score_grid,
+        score_grid: spec.score_grid,
         references: args.references.clone(),
         // The experiment's budget decides its references (`ensure_references`).
         quick_reference_photons: 0,

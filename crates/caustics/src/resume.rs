@@ -84,8 +84,6 @@ impl ExeStamp {
 pub struct Expected<'a> {
     /// The run.
     pub spec: &'a RunSpec,
-    /// The experiment's `score_grid`.
-    pub score_grid: u32,
     /// The experiment's `exposure`.
     pub exposure: Option<f32>,
     /// The reference `caustics run` would score against (as it writes it in
@@ -169,7 +167,7 @@ fn stale_reason(dir: &Path, r: &RunResult, x: &Expected<'_>) -> Option<String> {
             differs(
                 "scoring.grid",
                 r.scoring.as_ref().map(|g| g.grid),
-                Some(x.score_grid),
+                Some(x.spec.score_grid),
             )
         })
         .or_else(|| match x.exposure {

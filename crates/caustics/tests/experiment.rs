@@ -127,7 +127,7 @@ fn unknown_method_scene_and_param_name_file_and_field() {
 
 #[test]
 fn malformed_files_are_clear_errors() {
-    let cases: [(&str, &[&str]); 13] = [
+    let cases: [(&str, &[&str]); 15] = [
         (
             r#"{"name": "x", "resolution": {"scale": 0.5, "widht": 3}, "runs": [{"scenes": "*", "methods": "*"}]}"#,
             &["resolution", "widht"],
@@ -164,6 +164,14 @@ fn malformed_files_are_clear_errors() {
             &["runs[0].params.samples", "at least one"],
         ),
         (
+            r#"{"name": "x", "score_grid_scenes": {"ring": 0}, "runs": [{"scenes": ["ring"], "methods": ["pinhole"]}]}"#,
+            &["score_grid_scenes.ring", "1..="],
+        ),
+        (
+            r#"{"name": "x", "score_grid_scenes": {"water_pool": 8}, "runs": [{"scenes": ["ring"], "methods": ["pinhole"]}]}"#,
+            &["score_grid_scenes.water_pool", "no run"],
+        ),
+        (
             r#"{"name": "x", "runs": [{"scenes": ["ring"], "methods": ["pinhole"]}, {"scenes": ["ring"], "methods": ["pinhole"]}]}"#,
             &["already made by runs[0]"],
         ),
@@ -187,6 +195,24 @@ fn malformed_files_are_clear_errors() {
         e.contains("paper.figures[0]") && e.contains("matches no run"),
         "{e}"
     );
+}
+
+#[test]
+fn a_scene_may_be_scored_on_a_finer_grid() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let p = write(
+        dir.path(),
+        "grids",
+        r#"{"name": "grids", "score_grid": 2, "score_grid_scenes": {"light_leak": 8},
+            "runs": [{"scenes": ["ring", "light_leak"], "methods": ["wavefront"]}]}"#,
+    );
+    let e = Experiment::load(&p, 1.0).expect("valid");
+    let grids: Vec<(&str, u32)> = e
+        .runs
+        .iter()
+        .map(|r| (r.scene.name.as_str(), r.score_grid))
+        .collect();
+    assert_eq!(grids, [("ring", 2), ("light_leak", 8)]);
 }
 
 #[test]
