@@ -15,8 +15,8 @@
 // kernel's outer texels (ring: 16% of the caustic at the default 16-texel kernel). A
 // texel whose direction misses the plane in front of the centre (past its horizon, or
 // more than twice or less than half the hit's distance) takes the hit's own distance
-// and angle. Needs `cm: CausticMapUniform` bound by the
-// including pass.
+// and angle (energy is then kept only approximately). Needs `cm: CausticMapUniform`
+// bound by the including pass.
 
 struct SplatOut {
     @builtin(position) clip: vec4<f32>,
