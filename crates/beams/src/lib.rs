@@ -627,8 +627,10 @@ fn indirect_args_group(
     Ok(schema.bind(device, &[("indirect_args", buffer)])?)
 }
 
-impl CausticsMethod for BeamMethod {
-    fn record(&mut self, frame: &mut Frame<'_>) -> Result<(), MethodError> {
+impl BeamMethod {
+    /// Generates the beams: light G-buffer and impostors (impostor tracer), then the
+    /// base grid, refined level by level, and the draw arguments.
+    fn record_light_side(&self, frame: &mut Frame<'_>) -> Result<(), MethodError> {
         let renderer = frame.renderer;
         let scene = renderer.scene();
         let b = &self.buffers;
@@ -667,6 +669,19 @@ impl CausticsMethod for BeamMethod {
                 pass.dispatch("advance", [1, 1, 1])?;
             }
             pass.dispatch("finalize", [1, 1, 1])?;
+        }
+        Ok(())
+    }
+}
+
+impl CausticsMethod for BeamMethod {
+    fn record(&mut self, frame: &mut Frame<'_>) -> Result<(), MethodError> {
+        let renderer = frame.renderer;
+        let b = &self.buffers;
+        // Light side: the beams (and, for adaptive beams, the refinement the camera
+        // decided in the whole frame before) are kept by a reused scoring sub-frame.
+        if !frame.reuses_light_side() {
+            self.record_light_side(frame)?;
         }
         {
             let targets = renderer.targets();

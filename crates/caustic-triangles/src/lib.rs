@@ -477,6 +477,16 @@ impl CausticsMethod for CausticTriangles {
 
 impl Reconstruction {
     fn record(&self, frame: &mut Frame<'_>) -> Result<(), MethodError> {
+        // Everything before the lookup (hits, triangle areas, the caustic triangles and
+        // orphans drawn into the light-space cube map) is independent of the camera: a
+        // reused scoring sub-frame keeps it.
+        if !frame.reuses_light_side() {
+            self.record_light_side(frame)?;
+        }
+        self.map.record_lookup(frame)
+    }
+
+    fn record_light_side(&self, frame: &mut Frame<'_>) -> Result<(), MethodError> {
         self.hits.record(frame)?;
         frame
             .encoder
@@ -506,7 +516,7 @@ impl Reconstruction {
                 pass.draw(0..6 * self.hits.texels(), face..face + 1);
             }
         }
-        self.map.record_lookup(frame)
+        Ok(())
     }
 
     fn counters(&self, ctx: &GpuContext) -> Result<Counters, MethodError> {

@@ -350,3 +350,22 @@ fn bad_parameters_and_unsupported_scenes_are_clear() {
         .expect_err("a glass cylinder must be declined");
     assert!(reason.0.contains("dielectric cylinder"), "{}", reason.0);
 }
+
+/// The scoring frame traces the photons and draws the caustic triangles (and orphans)
+/// into the cube map once, then only looks the map up for each sub-pixel camera
+/// (`Frame::reuses_light_side`): pixel for pixel the image of whole sub-frames.
+#[test]
+fn scoring_reuses_the_drawn_cube_map_exactly() {
+    let gpu = Gpu::new(builtin("sphere_on_plane", 64, 48));
+    let mut method = gpu.method(
+        &caustics_method::registry_entry::<CausticTriangles>(),
+        caustics_testing::photon_hits::small(
+            serde_json::json!({"reflections": true, "splat_orphans": true}),
+        ),
+    );
+    let scored = gpu.assert_light_side_reuse_is_exact(method.as_mut(), 2);
+    assert!(
+        scored.surface.sum_luminance() > 0.0,
+        "a black caustic proves nothing"
+    );
+}

@@ -264,6 +264,7 @@ pub fn run_scene(o: &RunOptions, scene: Scene) -> Result<RunOutcome> {
         method.as_mut(),
         &mut accumulator,
         o.score_grid,
+        caustics_method::LightSide::Reuse,
     )?;
     let scoring = ScoringInfo {
         grid: o.score_grid,

@@ -18,6 +18,7 @@ pub struct Frame<'a> {
     pub mode: FrameMode,
     /// The shared resources: scene, G-buffers, targets, group-0 bind group.
     pub renderer: &'a Renderer,
+    reuses_light_side: bool,
     profiler: &'a mut PassProfiler,
     started: Instant,
 }
@@ -77,6 +78,7 @@ impl<'a> Frame<'a> {
         renderer: &'a Renderer,
         profiler: &'a mut PassProfiler,
         mode: FrameMode,
+        reuses_light_side: bool,
     ) -> Result<Self, GpuError> {
         profiler.begin_frame(mode)?;
         let encoder =
@@ -89,6 +91,7 @@ impl<'a> Frame<'a> {
             encoder,
             mode,
             renderer,
+            reuses_light_side,
             profiler,
             started: Instant::now(),
         })
@@ -97,6 +100,17 @@ impl<'a> Frame<'a> {
     /// Whether fill-rate counting pipelines should be used in this frame.
     pub fn counting(&self) -> bool {
         self.mode == FrameMode::Count
+    }
+
+    /// Whether this frame reuses the light-side work of the frame before it: a scoring
+    /// sub-frame after the first ([`Renderer::begin_scoring_subframe`]), where only the
+    /// camera moved (by less than a pixel). A method then records only its camera-side
+    /// passes (those that read the camera G-buffer or write camera-resolution targets)
+    /// and keeps the buffers and textures its light-side passes (photon tracing, beam
+    /// generation, wavefront tracing, light-space splats) filled in the previous frame.
+    /// Never true in timed or count frames: what is measured is always a whole frame.
+    pub fn reuses_light_side(&self) -> bool {
+        self.reuses_light_side
     }
 
     /// Opens a named, profiled render pass. `name` is `"<owner>/<pass>"`, e.g.

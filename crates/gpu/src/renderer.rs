@@ -172,7 +172,8 @@ impl DirectLighting {
         self.lights.iter().map(|l| l.shadow.bytes()).sum()
     }
 
-    /// Shadow maps, then one draw per light into the direct target.
+    /// Shadow maps (kept from the previous frame when it [reuses the light
+    /// side](Frame::reuses_light_side)), then one draw per light into the direct target.
     fn record(
         &self,
         frame: &mut Frame<'_>,
@@ -180,8 +181,10 @@ impl DirectLighting {
         scene: &GpuScene,
         targets: &RadianceTargets,
     ) -> Result<(), GpuError> {
-        for light in &self.lights {
-            gbuffer_pass.record_shadow_map(frame, "base/shadow_map", scene, &light.shadow)?;
+        if !frame.reuses_light_side() {
+            for light in &self.lights {
+                gbuffer_pass.record_shadow_map(frame, "base/shadow_map", scene, &light.shadow)?;
+            }
         }
         for light in &self.lights {
             let attachments = [load_attachment(&targets.direct.view)];
@@ -441,7 +444,30 @@ impl Renderer {
         profiler: &'a mut PassProfiler,
         mode: FrameMode,
     ) -> Result<Frame<'a>, GpuError> {
-        let mut frame = Frame::new(self, profiler, mode)?;
+        self.begin(profiler, mode, false)
+    }
+
+    /// Starts a scoring sub-frame ([`FrameMode::Score`]). With `reuse_light_side` the
+    /// frame keeps the light-side work of the frame before it ([`Frame::reuses_light_side`]):
+    /// the base passes skip the shadow maps (they depend on the lights and the scene, not
+    /// on the camera), and methods skip their own light-side passes. The caller must have
+    /// rendered a whole frame of this scene and method just before, with nothing changed
+    /// since but the sub-pixel offset (`caustics_method::render_scoring_frame` does).
+    pub fn begin_scoring_subframe<'a>(
+        &'a self,
+        profiler: &'a mut PassProfiler,
+        reuse_light_side: bool,
+    ) -> Result<Frame<'a>, GpuError> {
+        self.begin(profiler, FrameMode::Score, reuse_light_side)
+    }
+
+    fn begin<'a>(
+        &'a self,
+        profiler: &'a mut PassProfiler,
+        mode: FrameMode,
+        reuse_light_side: bool,
+    ) -> Result<Frame<'a>, GpuError> {
+        let mut frame = Frame::new(self, profiler, mode, reuse_light_side)?;
         if mode == FrameMode::Count {
             frame.encoder.clear_buffer(&self.fill_counts, 0, None);
         }

@@ -5,9 +5,11 @@
 //! hit or missed, never averaged, and the error measures camera aliasing as much as the
 //! method. A scoring frame renders the same frame `N×N` times with the camera shifted
 //! by stratified sub-pixel offsets ([`subpixel_offsets`], applied to the projection by
-//! [`Renderer::set_subpixel_offset`], so the G-buffer, the base passes and every method
-//! pass see the same shifted camera) and averages them on the GPU
+//! [`Renderer::set_subpixel_offset`], so the G-buffer, the base passes and every
+//! camera-side method pass see the same shifted camera) and averages them on the GPU
 //! ([`ScoreAccumulator`]): the mean converges to the box filter as `N` grows. The
+//! light-side passes, which do not depend on the camera, may run once before the
+//! sub-frames ([`Renderer::begin_scoring_subframe`], `caustics_method::LightSide`). The
 //! scoring frames come after the timed frames and are never timed.
 
 use crate::frame::Frame;

@@ -11,7 +11,7 @@
 use std::collections::BTreeMap;
 
 use caustics_gpu::{
-    Frame, FrameMode, GpuContext, GpuError, PassProfiler, Renderer, ScoreAccumulator, ScoredImages,
+    Frame, GpuContext, GpuError, PassProfiler, Renderer, ScoreAccumulator, ScoredImages,
     subpixel_offsets,
 };
 use caustics_scene::Scene;
@@ -340,26 +340,54 @@ fn create_erased<M: Method>(
     M::create(ctx, renderer, p.get::<M::Params>(M::NAME)?)
 }
 
+/// How the sub-frames of a scoring frame get their light-side work.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LightSide {
+    /// Rendered once, in a whole frame at the pixel centre before the sub-frames, and
+    /// kept by every sub-frame ([`Frame::reuses_light_side`]):
+    /// the image scored is the timed frame's light (its photons, beams, wavefront)
+    /// seen through a box-filtered camera. What `caustics run` does.
+    Reuse,
+    /// Rendered again in every sub-frame, each a whole frame. For a method whose light
+    /// side does not depend on the camera the image is the same as with
+    /// [`LightSide::Reuse`] (each method's tests check this); adaptive beams refine for
+    /// each shifted camera.
+    RenderEach,
+}
+
 /// Renders the scoring frame of `method` (DESIGN "Measuring honestly"): the frame
 /// again at each of the `grid × grid` sub-pixel camera offsets of
-/// [`subpixel_offsets`], the three radiance targets averaged on the GPU. Each
-/// sub-frame is a whole frame (G-buffer, base passes, the method's passes), so a method
-/// must give the same image for the same offset whatever it rendered before; nothing
-/// is timed or counted. `accumulator` is allocated once per run; the camera is back at
-/// the pixel centre when this returns.
+/// [`subpixel_offsets`], the three radiance targets averaged on the GPU; nothing is
+/// timed or counted. `accumulator` is allocated once per run; the camera is back at the
+/// pixel centre when this returns.
+///
+/// With [`LightSide::Reuse`] a whole frame at the pixel centre comes first (not
+/// averaged), and every sub-frame records only the camera-side passes (camera
+/// G-buffer, direct light, the method's camera-side passes), so the light-side work
+/// (the larger part of most methods' frames) is done once rather than `grid²` times.
+/// With [`LightSide::RenderEach`] each sub-frame is a whole frame, so a method must
+/// give the same image for the same offset whatever it rendered before.
 pub fn render_scoring_frame(
     ctx: &GpuContext,
     renderer: &Renderer,
     method: &mut dyn CausticsMethod,
     accumulator: &mut ScoreAccumulator,
     grid: u32,
+    light_side: LightSide,
 ) -> Result<ScoredImages, MethodError> {
     let offsets = subpixel_offsets(grid);
-    let mut profiler = PassProfiler::unmeasured(offsets.len() as u32);
+    let reuse = light_side == LightSide::Reuse;
+    let mut profiler = PassProfiler::unmeasured(offsets.len() as u32 + u32::from(reuse));
     let rendered = (|| {
+        if reuse {
+            renderer.set_subpixel_offset(&ctx.queue, [0.0, 0.0]);
+            let mut frame = renderer.begin_scoring_subframe(&mut profiler, false)?;
+            method.record(&mut frame)?;
+            frame.submit(ctx)?;
+        }
         for offset in &offsets {
             renderer.set_subpixel_offset(&ctx.queue, *offset);
-            let mut frame = renderer.begin_frame(&mut profiler, FrameMode::Score)?;
+            let mut frame = renderer.begin_scoring_subframe(&mut profiler, reuse)?;
             method.record(&mut frame)?;
             accumulator.record(&mut frame)?;
             frame.submit(ctx)?;

@@ -12,7 +12,7 @@ use caustics_gpu::{
     AdapterChoice, Frame, GpuContext, GpuScene, Renderer, RendererOptions, ScoreAccumulator,
     shader, wgpu,
 };
-use caustics_method::{CausticsMethod, Counters, MethodError, render_scoring_frame};
+use caustics_method::{CausticsMethod, Counters, LightSide, MethodError, render_scoring_frame};
 use caustics_scene::Scene;
 use wgpu::util::DeviceExt;
 
@@ -27,10 +27,16 @@ const FOCUS_PX: [f32; 4] = [10.3, 7.45, 12.6, 7.8];
 
 struct Focus {
     draw: RasterPass,
+    /// Frames that recorded the (here empty) light side: what a method skips when
+    /// [`Frame::reuses_light_side`].
+    light_side_frames: u32,
 }
 
 impl CausticsMethod for Focus {
     fn record(&mut self, frame: &mut Frame<'_>) -> Result<(), MethodError> {
+        if !frame.reuses_light_side() {
+            self.light_side_frames += 1;
+        }
         let renderer = frame.renderer;
         let attachments = [load_attachment(&renderer.targets().surface.view)];
         let mut pass = self.draw.begin(frame, &attachments, None)?;
@@ -75,7 +81,10 @@ fn focus_method(ctx: &GpuContext, renderer: &Renderer) -> Focus {
         .fragment("fs_focus", &[Some(additive_hdr_target())])
         .build()
         .expect("focus pass");
-    Focus { draw }
+    Focus {
+        draw,
+        light_side_frames: 0,
+    }
 }
 
 fn scene(dir: &std::path::Path) -> Scene {
@@ -128,10 +137,24 @@ fn a_subpixel_focus_scored_over_4x4_offsets_is_5x_closer_to_the_box_filter() {
     let mut method = focus_method(&ctx, &renderer);
     let mut accumulator = ScoreAccumulator::new(&ctx, &renderer).expect("accumulator");
 
-    let one = render_scoring_frame(&ctx, &renderer, &mut method, &mut accumulator, 1)
-        .expect("1x1 scoring frame");
-    let sixteen = render_scoring_frame(&ctx, &renderer, &mut method, &mut accumulator, 4)
-        .expect("4x4 scoring frame");
+    let one = render_scoring_frame(
+        &ctx,
+        &renderer,
+        &mut method,
+        &mut accumulator,
+        1,
+        LightSide::Reuse,
+    )
+    .expect("1x1 scoring frame");
+    let sixteen = render_scoring_frame(
+        &ctx,
+        &renderer,
+        &mut method,
+        &mut accumulator,
+        4,
+        LightSide::Reuse,
+    )
+    .expect("4x4 scoring frame");
     assert_eq!((one.frames, sixteen.frames), (1, 16));
 
     // Each sub-frame samples the pixel at the offset's position, so every pixel holds
@@ -168,7 +191,62 @@ fn a_subpixel_focus_scored_over_4x4_offsets_is_5x_closer_to_the_box_filter() {
         "pixel-averaged error {e16:.5} is not 5x below the 1-spp error {e1:.5}"
     );
     // The camera is back at the pixel centre: the next 1x1 frame repeats the first.
-    let again =
-        render_scoring_frame(&ctx, &renderer, &mut method, &mut accumulator, 1).expect("1x1 again");
+    let again = render_scoring_frame(
+        &ctx,
+        &renderer,
+        &mut method,
+        &mut accumulator,
+        1,
+        LightSide::Reuse,
+    )
+    .expect("1x1 again");
     assert_eq!(again.surface, one.surface);
+}
+
+#[test]
+fn a_scoring_frame_renders_the_light_side_once_and_scores_the_same_image() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let ctx =
+        GpuContext::new(&AdapterChoice::from_flag_or_env(None)).unwrap_or_else(|e| panic!("{e}"));
+    let gpu_scene =
+        GpuScene::upload(&ctx, Arc::new(scene(tmp.path())), Default::default()).expect("upload");
+    let renderer = Renderer::new(&ctx, gpu_scene, RendererOptions::default()).expect("renderer");
+    let mut method = focus_method(&ctx, &renderer);
+    let mut accumulator = ScoreAccumulator::new(&ctx, &renderer).expect("accumulator");
+
+    let each = render_scoring_frame(
+        &ctx,
+        &renderer,
+        &mut method,
+        &mut accumulator,
+        4,
+        LightSide::RenderEach,
+    )
+    .expect("4x4, light side in every sub-frame");
+    assert_eq!(
+        method.light_side_frames, 16,
+        "every sub-frame is a whole frame"
+    );
+
+    method.light_side_frames = 0;
+    let reused = render_scoring_frame(
+        &ctx,
+        &renderer,
+        &mut method,
+        &mut accumulator,
+        4,
+        LightSide::Reuse,
+    )
+    .expect("4x4, light side reused");
+    // One whole frame at the pixel centre, then 16 camera-side sub-frames.
+    assert_eq!(
+        method.light_side_frames, 1,
+        "the light side is rendered once"
+    );
+    assert_eq!(reused.frames, 16, "the priming frame is not averaged");
+    assert_eq!(reused.surface, each.surface);
+    assert_eq!(
+        reused.direct, each.direct,
+        "shadow maps kept, direct light the same"
+    );
 }

@@ -466,3 +466,19 @@ fn fresnel_reflection_adds_the_glass_spheres_halo() {
         },
     );
 }
+
+/// Pinhole's gather is all camera-side: the scoring frame with the light side reused
+/// (samples prepared once) is pixel for pixel the image of whole sub-frames.
+#[test]
+fn scoring_with_the_light_side_reused_is_exact() {
+    let gpu = Gpu::new(builtin("ring", 48, 36));
+    let mut method = gpu.method(
+        &caustics_method::registry_entry::<pinhole::Pinhole>(),
+        serde_json::json!({"samples": 100, "cube_size": 64}),
+    );
+    let scored = gpu.assert_light_side_reuse_is_exact(method.as_mut(), 2);
+    assert!(
+        scored.surface.sum_luminance() > 0.0,
+        "a black caustic proves nothing"
+    );
+}

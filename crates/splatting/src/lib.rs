@@ -227,8 +227,10 @@ impl Splatting {
 impl CausticsMethod for Splatting {
     fn record(&mut self, frame: &mut Frame<'_>) -> Result<(), MethodError> {
         for ((hits, map), splat_pass) in self.pairs.iter().zip(&self.splat_passes) {
-            hits.record(frame)?;
-            {
+            // Light side: the hits and their splats into the light-space cube map do not
+            // depend on the camera; a reused scoring sub-frame only looks them up.
+            if !frame.reuses_light_side() {
+                hits.record(frame)?;
                 let target = map.reconstruction_attachment();
                 let mut pass = splat_pass.begin(frame, &target, None)?;
                 for face in 0..6 {

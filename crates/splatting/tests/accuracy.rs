@@ -173,3 +173,20 @@ fn bad_parameters_are_clear() {
         ],
     );
 }
+
+/// The scoring frame traces the photons and splats them into the cube map once, then
+/// only looks the map up for each sub-pixel camera (`Frame::reuses_light_side`): pixel
+/// for pixel the image of whole sub-frames.
+#[test]
+fn scoring_reuses_the_splatted_cube_map_exactly() {
+    let gpu = Gpu::new(builtin("sphere_on_plane", 64, 48));
+    let mut method = gpu.method(
+        &caustics_method::registry_entry::<Splatting>(),
+        caustics_testing::photon_hits::small(serde_json::json!({"reflections": true})),
+    );
+    let scored = gpu.assert_light_side_reuse_is_exact(method.as_mut(), 2);
+    assert!(
+        scored.surface.sum_luminance() > 0.0,
+        "a black caustic proves nothing"
+    );
+}

@@ -237,3 +237,25 @@ fn splat_orphans_bring_back_the_light_of_torn_beams() {
         },
     );
 }
+
+/// The scoring frame generates the beams once, then rasterizes them (with the orphan
+/// points and the surface filter) for each sub-pixel camera (`Frame::reuses_light_side`):
+/// pixel for pixel the image of whole sub-frames, surface and volume.
+#[test]
+fn scoring_reuses_the_generated_beams_exactly() {
+    let gpu = Gpu::new(builtin("fog_sphere", 64, 48));
+    let info = caustics_method::registry_entry::<static_grid::StaticGrid>();
+    let mut method = gpu.method(
+        &info,
+        serde_json::json!({"light_resolution": 256, "grid": 32, "splat_orphans": true}),
+    );
+    let scored = gpu.assert_light_side_reuse_is_exact(method.as_mut(), 2);
+    assert!(
+        scored.surface.sum_luminance() > 0.0,
+        "a black caustic proves nothing"
+    );
+    assert!(
+        scored.volume.sum_luminance() > 0.0,
+        "a black volume caustic proves nothing"
+    );
+}

@@ -7,7 +7,7 @@ use caustics_gpu::{
     AdapterChoice, FrameMode, FrameSample, GpuContext, GpuScene, PassProfiler, Renderer,
     RendererOptions, ScoreAccumulator,
 };
-use caustics_method::{CausticsMethod, Counters, MethodError, MethodInfo};
+use caustics_method::{CausticsMethod, Counters, LightSide, MethodError, MethodInfo};
 use caustics_metrics::HdrImage;
 use caustics_scene::Scene;
 
@@ -169,8 +169,19 @@ impl Gpu {
     }
 
     /// The scoring frame (DESIGN "Measuring honestly"): the frame at `grid × grid`
-    /// stratified sub-pixel offsets averaged on the GPU, the reference's pixel footprint.
+    /// stratified sub-pixel offsets averaged on the GPU, the reference's pixel footprint,
+    /// with the light side rendered once and reused, as `caustics run` scores.
     pub fn scoring_frame(&self, method: &mut dyn CausticsMethod, grid: u32) -> Scored {
+        self.scoring_frame_with(method, grid, LightSide::Reuse)
+    }
+
+    /// [`Harness::scoring_frame`] with the light side rendered as `light_side` says.
+    pub fn scoring_frame_with(
+        &self,
+        method: &mut dyn CausticsMethod,
+        grid: u32,
+        light_side: LightSide,
+    ) -> Scored {
         let mut accumulator = ScoreAccumulator::new(&self.ctx, &self.renderer)
             .unwrap_or_else(|e| panic!("score accumulator: {e}"));
         let scored = caustics_method::render_scoring_frame(
@@ -179,6 +190,7 @@ impl Gpu {
             method,
             &mut accumulator,
             grid,
+            light_side,
         )
         .unwrap_or_else(|e| panic!("scoring frame: {e}"));
         let image = |rgba: &[f32], what: &str| self.image(rgba, what);
@@ -188,6 +200,40 @@ impl Gpu {
             volume: image(&scored.volume, "volume caustic image (scoring frame)"),
             samples: scored.frames,
         }
+    }
+
+    /// Checks a method's split into light-side and camera-side passes
+    /// ([`caustics_gpu::Frame::reuses_light_side`]): its `grid × grid` scoring frame with
+    /// the light side reused must equal the one where every sub-frame is a whole frame,
+    /// pixel for pixel (surface, volume and direct). A camera-dependent pass skipped in
+    /// reused sub-frames would leave the centre camera's result in every sub-frame and
+    /// fail this. Returns the reused frame.
+    pub fn assert_light_side_reuse_is_exact(
+        &self,
+        method: &mut dyn CausticsMethod,
+        grid: u32,
+    ) -> Scored {
+        let each = self.scoring_frame_with(method, grid, LightSide::RenderEach);
+        let reused = self.scoring_frame_with(method, grid, LightSide::Reuse);
+        for (what, a, b) in [
+            ("surface", &reused.surface, &each.surface),
+            ("volume", &reused.volume, &each.volume),
+            ("direct", &reused.direct, &each.direct),
+        ] {
+            let differing = a
+                .pixels
+                .iter()
+                .zip(&b.pixels)
+                .filter(|(x, y)| x != y)
+                .count();
+            assert_eq!(
+                differing,
+                0,
+                "{what}: {differing} of {} pixels differ between the {grid}x{grid} scoring frame with the light side reused and with it rendered in every sub-frame",
+                a.pixels.len()
+            );
+        }
+        reused
     }
 
     fn image(&self, rgba: &[f32], what: &str) -> HdrImage {

@@ -631,9 +631,9 @@ impl Sheet {
     }
 }
 
-impl CausticsMethod for Wavefront {
-    fn record(&mut self, frame: &mut Frame<'_>) -> Result<(), MethodError> {
-        let renderer = frame.renderer;
+impl Wavefront {
+    /// Traces every sheet's vertices and classifies its triangles (camera-independent).
+    fn record_light_side(&self, frame: &mut Frame<'_>) -> Result<(), MethodError> {
         let triangle_bytes = self.triangle_counts.size();
         frame.encoder.copy_buffer_to_buffer(
             &self.counters_init,
@@ -666,6 +666,19 @@ impl CausticsMethod for Wavefront {
                 )?;
             }
         }
+        Ok(())
+    }
+}
+
+impl CausticsMethod for Wavefront {
+    fn record(&mut self, frame: &mut Frame<'_>) -> Result<(), MethodError> {
+        let renderer = frame.renderer;
+        // Light side: the sheets' vertices and their triangles' verdicts do not depend on
+        // the camera; a reused scoring sub-frame keeps them (and their counters).
+        if !frame.reuses_light_side() {
+            self.record_light_side(frame)?;
+        }
+
         let attachments = [load_attachment(&renderer.targets().surface.view)];
         {
             let mut pass = self.splat.begin(frame, &attachments, None)?;

@@ -473,3 +473,20 @@ fn bumpy_glass_orphans_bring_back_the_torn_light() {
         },
     );
 }
+
+/// The scoring frame traces and classifies the sheets once, then only splats them for
+/// each sub-pixel camera (`Frame::reuses_light_side`): pixel for pixel the image of
+/// whole sub-frames, with every sheet kind and the orphan points on.
+#[test]
+fn scoring_reuses_the_traced_sheets_exactly() {
+    let gpu = Gpu::new(builtin("sphere_on_plane", 64, 48));
+    let mut method = gpu.method(
+        &wavefront_info(),
+        serde_json::json!({"grid": 128, "bounces": 2, "reflections": true, "splat_orphans": true}),
+    );
+    let scored = gpu.assert_light_side_reuse_is_exact(method.as_mut(), 2);
+    assert!(
+        scored.surface.sum_luminance() > 0.0,
+        "a black caustic proves nothing"
+    );
+}
