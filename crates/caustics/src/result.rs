@@ -82,8 +82,9 @@ pub struct ScoringInfo {
     pub grid: u32,
     /// N², the samples per pixel of the scored images.
     pub samples_per_pixel: u32,
-    /// CPU wall time of all scoring sub-frames together (ms): record, submit, wait and
-    /// accumulate, outside the timed frames.
+    /// CPU wall time of the scoring frame (ms): its whole frame at the pixel centre (the
+    /// light side, rendered once) and the N² camera-side sub-frames, each recorded,
+    /// submitted, waited for and accumulated, outside the timed frames.
     pub wall_ms: f64,
 }
 

@@ -20,7 +20,10 @@ use caustics_scene::Scene;
 pub trait CausticsMethod {
     /// Records the method's passes for one frame. In count frames
     /// (`frame.counting()`), camera-resolution pipelines must use their fill-counting
-    /// variant (a `caustics_gpu::pass::RasterPass` built `.counted()` picks it).
+    /// variant (a `caustics_gpu::pass::RasterPass` built `.counted()` picks it). When
+    /// `frame.reuses_light_side()` (scoring sub-frames), record only the camera-side
+    /// passes and keep what the light-side passes left in the previous frame; the
+    /// method's tests check the image is the same (`Gpu::assert_light_side_reuse_is_exact`).
     fn record(&mut self, frame: &mut Frame<'_>) -> Result<(), MethodError>;
 
     /// Counters of the last frame (beams, triangles, photons, overflow, ...). Called
