@@ -104,11 +104,12 @@ impl<'a> Frame<'a> {
 
     /// Whether this frame reuses the light-side work of the frame before it: a scoring
     /// sub-frame ([`Renderer::begin_scoring_subframe`]) after the scoring frame's whole
-    /// frame at the pixel centre, where only the camera moved (by under a pixel). A method then records only its camera-side
-    /// passes (those that read the camera G-buffer or write camera-resolution targets)
-    /// and keeps the buffers and textures its light-side passes (photon tracing, beam
-    /// generation, wavefront tracing, light-space splats) filled in the previous frame.
-    /// Never true in timed or count frames: what is measured is always a whole frame.
+    /// frame at the pixel centre, where only the camera moved (by under a pixel). A
+    /// method then records only its camera-side passes (those that read the camera
+    /// G-buffer or write camera-resolution targets) and keeps the buffers and textures
+    /// its light-side passes (photon tracing, beam generation, wavefront tracing,
+    /// light-space splats) filled in the previous frame. Never true in timed or count
+    /// frames: what is measured is always a whole frame.
     pub fn reuses_light_side(&self) -> bool {
         self.reuses_light_side
     }

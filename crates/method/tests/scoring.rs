@@ -121,6 +121,19 @@ fn rmse_against_box_filter(surface_rgba: &[f32]) -> f64 {
     (sum / (WIDTH * HEIGHT) as f64).sqrt()
 }
 
+/// The GPU, the focus scene's renderer, the focus method and a score accumulator.
+fn focus_setup() -> (GpuContext, Renderer, Focus, ScoreAccumulator) {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let ctx =
+        GpuContext::new(&AdapterChoice::from_flag_or_env(None)).unwrap_or_else(|e| panic!("{e}"));
+    let gpu_scene =
+        GpuScene::upload(&ctx, Arc::new(scene(tmp.path())), Default::default()).expect("upload");
+    let renderer = Renderer::new(&ctx, gpu_scene, RendererOptions::default()).expect("renderer");
+    let method = focus_method(&ctx, &renderer);
+    let accumulator = ScoreAccumulator::new(&ctx, &renderer).expect("accumulator");
+    (ctx, renderer, method, accumulator)
+}
+
 #[test]
 fn focus_shader_validates() -> Result<(), String> {
     shader::validate_wgsl("focus.wgsl", &shader::compose_method(FOCUS_WGSL))
@@ -128,14 +141,7 @@ fn focus_shader_validates() -> Result<(), String> {
 
 #[test]
 fn a_subpixel_focus_scored_over_4x4_offsets_is_5x_closer_to_the_box_filter() {
-    let tmp = tempfile::tempdir().expect("tempdir");
-    let ctx =
-        GpuContext::new(&AdapterChoice::from_flag_or_env(None)).unwrap_or_else(|e| panic!("{e}"));
-    let gpu_scene =
-        GpuScene::upload(&ctx, Arc::new(scene(tmp.path())), Default::default()).expect("upload");
-    let renderer = Renderer::new(&ctx, gpu_scene, RendererOptions::default()).expect("renderer");
-    let mut method = focus_method(&ctx, &renderer);
-    let mut accumulator = ScoreAccumulator::new(&ctx, &renderer).expect("accumulator");
+    let (ctx, renderer, mut method, mut accumulator) = focus_setup();
 
     let one = render_scoring_frame(
         &ctx,
@@ -205,14 +211,7 @@ fn a_subpixel_focus_scored_over_4x4_offsets_is_5x_closer_to_the_box_filter() {
 
 #[test]
 fn a_scoring_frame_renders_the_light_side_once_and_scores_the_same_image() {
-    let tmp = tempfile::tempdir().expect("tempdir");
-    let ctx =
-        GpuContext::new(&AdapterChoice::from_flag_or_env(None)).unwrap_or_else(|e| panic!("{e}"));
-    let gpu_scene =
-        GpuScene::upload(&ctx, Arc::new(scene(tmp.path())), Default::default()).expect("upload");
-    let renderer = Renderer::new(&ctx, gpu_scene, RendererOptions::default()).expect("renderer");
-    let mut method = focus_method(&ctx, &renderer);
-    let mut accumulator = ScoreAccumulator::new(&ctx, &renderer).expect("accumulator");
+    let (ctx, renderer, mut method, mut accumulator) = focus_setup();
 
     let each = render_scoring_frame(
         &ctx,
