@@ -105,7 +105,7 @@ method_params! {
         split_camera: bool = true;
         /// split while the beam base spans more than this many pixels where its central ray passes closest to the eye (bound: an image side)
         split_camera_px: f64 = 16.0 => above(0.0, 16384.0);
-        /// beams to aim for, all families (Table 1's largest count at 1024x768): each level, coarse first, takes the splits the oracle asks for by priority (pixels of misplaced light; a triangle whose light would be dropped first) while they fit the beams left, four children per beam at stake (the paper's "convergent beams ... are refined with higher priority", Sect. 4.2); a target, not a bound (children may emit more than estimated); 0 = every split asked (bound: max_beams)
+        /// beams to aim for, counted over the paper's families, the main path and the Fresnel reflection (Table 1's largest count at 1024x768; the internal reflections of `bounces` come on top, one family per leaf the budget buys): each level, coarse first, takes the splits the oracle asks for by priority (pixels of misplaced light; a triangle whose light would be dropped first) while they fit the beams left, four children per beam at stake (the paper's "convergent beams ... are refined with higher priority", Sect. 4.2); a target, not a bound (children may emit more than estimated); 0 = every split asked (bound: max_beams)
         beam_budget: u32 = 5300 => closed(0.0, 4194304.0);
     }
 }

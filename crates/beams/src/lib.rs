@@ -42,7 +42,10 @@
 //!   the light a discontinuity cuts) and, coarse levels first, takes those above a
 //!   threshold found from the level's priority histogram while their children (four
 //!   beams per beam at stake) fit the beams left; the rest stay leaves
-//!   (`splits_deferred`);
+//!   (`splits_deferred`). The budget counts the main path's and the Fresnel
+//!   reflection's beams, the paper's families; the internal reflections of `bounces`
+//!   follow the leaves it buys, so following more light does not coarsen the main
+//!   caustic;
 //! - all distance impostors (one per specular object, one of the diffuse receivers
 //!   around the generators) share one texture atlas, so each query is one inlined
 //!   search (WGSL inlines every call);
