@@ -33,7 +33,10 @@
 //! each caustic generator is rendered from each light: one hit image, distance maps
 //! and caustic cube map per (light, generator) pair ([`PhotonHits::for_scene`]), whose
 //! camera passes add up. Light passing from one generator to another (a chain, the
-//! ball over the water) is dropped where it meets the second, not traced on.
+//! ball over the water) is dropped where it meets the second by default; with
+//! `bounces` > 0 it is traced on exactly through the scene's BVH until a diffuse
+//! surface takes it (§4.1: the ray "is traced, possibly multiple times, until a diffuse
+//! or glossy surface is found") and lands in the first generator's caustic map.
 //!
 //! **Light paths.** The default path has one specular event per interface, the path
 //! whose power §4.1 gives as "the power going through a pixel of the light's camera
@@ -150,7 +153,8 @@ pub const COUNTER_DOCS: &[CounterDoc] = &[
     CounterDoc { name: "photons_second_bounce", doc: "texels whose light, reflected off a mirror generator, meets that mirror again once its bounces further reflections are spent (the ring's opposite wall): dropped" },
     CounterDoc { name: "photons_no_receiver", doc: "texels whose light, leaving the generator, finds no surface in the receivers' distance map (it leaves the scene)" },
     CounterDoc { name: "photon_hits_silhouette", doc: "texels whose centre misses the generator beside one that meets it, traced from the generator's exact edge between them (silhouette_hits): landed with the share of the texel's light on the generator's side, a hit at the silhouette's landing; not among photon_hits, and no longer among photons_missing_generator (a silhouette texel whose light lands nowhere is counted with the other reasons)" },
-    CounterDoc { name: "photons_specular_receiver", doc: "texels whose light lands on another specular object (or where the receivers' distance map names no object): dropped, not traced on to the receivers behind it" },
+    CounterDoc { name: "photons_specular_receiver", doc: "texels whose light lands on another specular object (or where the receivers' distance map names no object): dropped, not traced on to the receivers behind it (with bounces > 0: those whose chain ends on no diffuse surface within bounces specular events, or at a shading normal that turns the light back)" },
+    CounterDoc { name: "photon_hits_chained", doc: "those of photon_hits whose light met another specular object after the generator and was traced on exactly through it (bounces > 0: a chain, the ball's light through the water)" },
 ];
 
 /// Most further specular events [`PhotonHitConfig::bounces`] allows (the counters
@@ -160,7 +164,9 @@ pub const MAX_BOUNCES: u32 = 8;
 /// Index of the first counter after the `HIT_*` reasons: the Fresnel reflection's
 /// valid hits (trace.wgsl `COUNTER_REFLECTED`), then one per bounce order.
 const COUNTER_REFLECTED: usize = 8;
-const COUNTERS: usize = COUNTER_REFLECTED + 1 + MAX_BOUNCES as usize;
+/// Index of the chained hits' counter (trace.wgsl `COUNTER_CHAINED`), after the orders.
+const COUNTER_CHAINED: usize = COUNTER_REFLECTED + 1 + MAX_BOUNCES as usize;
+const COUNTERS: usize = COUNTER_CHAINED + 1;
 
 caustics_method::method_params! {
     /// The settings shared by both photon-hit methods, a parameter group of each
@@ -176,7 +182,7 @@ caustics_method::method_params! {
         distance_test: bool = true;
         /// distance test: |stored - actual| <= tolerance x actual
         distance_tolerance: f64 = 0.05 => above(0.0, 1.0);
-        /// further specular events followed on the generator: internal reflections in a closed refractor (Fresnel and total), further reflections off a mirror (default 0: one event per interface)
+        /// further specular events followed: internal reflections in a closed refractor (Fresnel and total), further reflections off a mirror, and as many events on other specular objects the light meets after the generator (a chain, traced exactly through the scene's BVH) (default 0: one event per interface, light meeting another specular object is dropped)
         bounces: u32 = 0 => closed(0.0, 8.0);
         /// also follow the Fresnel reflection off a dielectric's first interface (paper: false)
         reflections: bool = false;
@@ -626,6 +632,9 @@ impl PhotonHits {
                     .silhouette_hits
                     .then(|| (COUNTER_EDGE, "photon_hits_silhouette".to_string())),
             )
+            .chain(
+                (config.bounces > 0).then(|| (COUNTER_CHAINED, "photon_hits_chained".to_string())),
+            )
             .collect();
         Ok(Self {
             gbuffer_name: format!("{method}/light_gbuffer"),
@@ -802,6 +811,7 @@ mod tests {
         names.push("photon_texels".into());
         names.push("photon_hits_fresnel_reflection".into());
         names.push("photon_hits_silhouette".into());
+        names.push("photon_hits_chained".into());
         names.extend((1..=MAX_BOUNCES).map(|k| format!("photon_hits_bounce_{k}")));
         if let Err(e) = caustics_method::CounterDoc::check(COUNTER_DOCS, &names) {
             panic!("{e}");
@@ -824,6 +834,7 @@ mod tests {
         // The silhouette hits' counter: the slot after the reasons, before the orders.
         assert_eq!(constant("HIT_EDGE"), Some(COUNTER_EDGE as u32));
         assert!(HIT_REASONS.len() <= COUNTER_EDGE && COUNTER_EDGE < COUNTER_REFLECTED);
+        assert_eq!(constant("COUNTER_CHAINED"), Some(COUNTER_CHAINED as u32));
         // Every order of a path fits below the reflection's path id.
         assert!(MAX_BOUNCES < constant("PATH_REFLECTED").unwrap_or(0));
         assert_eq!(

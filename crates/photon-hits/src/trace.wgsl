@@ -17,7 +17,10 @@
 //   triangles never join two;
 // * off a mirror, further reflections on the generator itself (the ring's opposite
 //   wall), up to `bounces`, in sheet 0 with their own path id;
-// * off a dielectric, the Fresnel reflection at the first interface, in the last sheet.
+// * off a dielectric, the Fresnel reflection at the first interface, in the last sheet;
+// * light meeting another specular object after the generator (a chain: the ball's
+//   light on the water), traced on exactly through the scene's BVH (`chain_on`), up to
+//   `bounces` events, in the sheet of its path with a path id of its own.
 // Hit slot of (sheet, face, texel): (sheet × faces + face) × texels per face + texel.
 //
 // Silhouette hits (FLAG_SILHOUETTE, the photon-hit methods' `silhouette_hits`, off by
@@ -76,6 +79,9 @@ const FLAG_SILHOUETTE: u32 = 4u;
 // HIT_EDGE's counter is the slot after the HIT_* reasons (index 7).
 const COUNTER_REFLECTED: u32 = 8u;
 const COUNTER_BOUNCE: u32 = 9u;
+// The valid hits whose light took a chain through another specular object (after the
+// bounce orders: COUNTER_BOUNCE + MAX_BOUNCES).
+const COUNTER_CHAINED: u32 = 17u;
 // Path ids: (generator × 2 + side) × PATH_ORDERS + order, where order is the number of
 // specular events beyond the default path, or PATH_REFLECTED for the Fresnel reflection.
 const PATH_ORDERS: u32 = 16u;
@@ -138,25 +144,13 @@ fn sheet_slot(texel_slot: u32, sheet: u32) -> u32 {
 // stores it with every sheet).
 var<private> on_edge: bool = false;
 
-// Light leaving the generator at `p` along `d` with `flux`: the receiver it lands on,
-// stored in `slot`; false (and the slot invalid) where it lands on none. A silhouette
-// texel's landing is stored as HIT_EDGE (counted apart; a valid hit otherwise).
-fn land(slot: u32, p: vec3<f32>, d: vec3<f32>, flux: vec3<f32>, path: u32, footprint: f32) -> bool {
-    // The receiver: the distance map of the diffuse objects around the centre.
-    let c = tu.center.xyz;
-    let hit = trace_receiver(p, d);
-    if !hit.found {
-        store_invalid(slot, HIT_NO_RECEIVER);
-        return false;
-    }
-    let receiver = impostor_object(receiver_ids, hit.position - c);
-    if receiver == NONE || materials[objects[receiver].material].kind != MAT_DIFFUSE {
-        store_invalid(slot, HIT_SPECULAR_RECEIVER);
-        return false;
-    }
+// Stores a landing on diffuse `receiver` at `x` (normal `n`, on the side the light
+// arrives on) in `slot`. A silhouette texel's landing is stored as HIT_EDGE (counted
+// apart; a valid hit otherwise): false then, true for a valid hit.
+fn store_landing(slot: u32, x: vec3<f32>, n: vec3<f32>, flux: vec3<f32>, receiver: u32, path: u32, footprint: f32) -> bool {
     var h: PhotonHit;
-    h.position = vec4<f32>(hit.position, length(hit.position - c));
-    h.normal = vec4<f32>(select(hit.normal, -hit.normal, dot(hit.normal, d) > 0.0), footprint);
+    h.position = vec4<f32>(x, length(x - tu.center.xyz));
+    h.normal = vec4<f32>(n, footprint);
     h.flux = vec4<f32>(flux, 0.0);
     if on_edge {
         h.ids = vec4<u32>(receiver, path, HIT_EDGE, 0u);
@@ -168,6 +162,107 @@ fn land(slot: u32, p: vec3<f32>, d: vec3<f32>, flux: vec3<f32>, path: u32, footp
     hits[slot] = h;
     atomicAdd(&trace_counters[HIT_VALID], 1u);
     return true;
+}
+
+// Light leaving the generator at `p` along `d` with `flux`: the receiver it lands on,
+// stored in `slot`; false (and the slot invalid) where it lands on none. Light that
+// meets another specular object first is a chain (`chain_on`) with `bounces` > 0, and
+// dropped without (the paper's one hit image per generator).
+fn land(slot: u32, p: vec3<f32>, d: vec3<f32>, flux: vec3<f32>, path: u32, footprint: f32) -> bool {
+    // The receiver: the distance map of the diffuse objects around the centre.
+    let c = tu.center.xyz;
+    let hit = trace_receiver(p, d);
+    if !hit.found {
+        store_invalid(slot, HIT_NO_RECEIVER);
+        return false;
+    }
+    let receiver = impostor_object(receiver_ids, hit.position - c);
+    if receiver == NONE || materials[objects[receiver].material].kind != MAT_DIFFUSE {
+        if receiver != NONE && tu.paths.x > 0u {
+            return chain_on(slot, p, d, flux, path, footprint);
+        }
+        store_invalid(slot, HIT_SPECULAR_RECEIVER);
+        return false;
+    }
+    let n = select(hit.normal, -hit.normal, dot(hit.normal, d) > 0.0);
+    return store_landing(slot, hit.position, n, flux, receiver, path, footprint);
+}
+
+// A chain (`bounces` > 0): light that left the generator and meets another specular
+// object (the ball's light on the water) is traced on exactly, through the scene's
+// BVH and analytic shapes, until a diffuse surface takes it, as §4.1's ray "is traced,
+// possibly multiple times, until a diffuse or glossy surface is found". Up to
+// `bounces` specular events on the way: a mirror reflects (its reflectance), a
+// dielectric refracts (its Fresnel transmittance; all of the light is reflected under
+// total internal reflection; the Fresnel-reflected part is not followed), each with
+// the adjoint shading-normal factor of a mesh (Veach 1997, §5.3). The landing is in
+// the generator's caustic map like any other (its distance from the map's centre is
+// what the camera pass tests), under a path id of its own (`chain_path`), so
+// triangles join only texels whose light took the same chain. Counted apart
+// (COUNTER_CHAINED) and among the valid hits.
+fn chain_on(slot: u32, p: vec3<f32>, d: vec3<f32>, flux: vec3<f32>, path: u32, footprint: f32) -> bool {
+    let eps = 1e-4 * tu.center.w;
+    var o = p;
+    var dir = d;
+    var f = flux;
+    // The first segment leaves the generator: skip it (its distance map said so).
+    var skip = tu.generator;
+    var first = NONE;
+    for (var events = 0u; events <= tu.paths.x; events++) {
+        let h = scene_closest_hit(o, dir, eps, skip);
+        if h.object == NONE {
+            store_invalid(slot, HIT_NO_RECEIVER);
+            return false;
+        }
+        let x = o + h.t * dir;
+        let m = materials[objects[h.object].material];
+        if m.kind == MAT_DIFFUSE {
+            let n = select(h.ns, -h.ns, dot(h.ns, dir) > 0.0);
+            let chained = events > 0u;
+            let landed = store_landing(slot, x, n, f, h.object, select(path, chain_path(path, first, events), chained), footprint);
+            if landed && chained {
+                atomicAdd(&trace_counters[COUNTER_CHAINED], 1u);
+            }
+            return landed;
+        }
+        if events == tu.paths.x {
+            break;
+        }
+        if first == NONE {
+            first = h.object;
+        }
+        var next: vec3<f32>;
+        if m.kind == MAT_MIRROR {
+            next = reflect(dir, h.ns);
+            f *= m.color.xyz;
+        } else {
+            let r = refract_through(dir, h.ns, m.ior);
+            if r.w < 0.0 {
+                next = reflect(dir, h.ns);
+            } else {
+                next = r.xyz;
+                f *= r.w;
+            }
+        }
+        let k = adjoint_shading_factor(-dir, next, h.ns, h.ng);
+        if k < 0.0 {
+            store_invalid(slot, HIT_SPECULAR_RECEIVER);
+            return false;
+        }
+        f *= k;
+        o = x;
+        dir = next;
+        skip = NONE;
+    }
+    store_invalid(slot, HIT_SPECULAR_RECEIVER);
+    return false;
+}
+
+// The path id of light that took a chain from `path` through specular object `first`
+// with `events` specular events: bit 31 set, then the object (9 bits) and the events
+// (3 bits) above the generator's own path ids (< 2^19: generators < 16,384).
+fn chain_path(path: u32, first: u32, events: u32) -> u32 {
+    return 0x80000000u | ((first & 0x1FFu) << 22u) | ((events & 7u) << 19u) | (path & 0x7FFFFu);
 }
 
 // The world ray of the light view through texel coordinates `uv` (texels, centres at
