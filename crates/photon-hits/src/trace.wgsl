@@ -178,7 +178,9 @@ fn land(slot: u32, p: vec3<f32>, d: vec3<f32>, flux: vec3<f32>, path: u32, footp
     }
     let receiver = impostor_object(receiver_ids, hit.position - c);
     if receiver == NONE || materials[objects[receiver].material].kind != MAT_DIFFUSE {
-        if receiver != NONE && tu.paths.x > 0u {
+        // The generator itself met again (a concave mesh) is not a chain: light
+        // leaving a closed refractor is not refracted into it again (crate doc).
+        if receiver != NONE && receiver != tu.generator && tu.paths.x > 0u {
             return chain_on(slot, p, d, flux, path, footprint);
         }
         store_invalid(slot, HIT_SPECULAR_RECEIVER);
