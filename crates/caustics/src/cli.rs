@@ -3,6 +3,7 @@
 
 use clap::{Parser, Subcommand};
 
+use crate::ceilings_cmd::CeilingsArgs;
 use crate::compare::CompareArgs;
 use crate::reference_cmd::ReferenceArgs;
 use crate::report::ReportArgs;
@@ -41,6 +42,10 @@ pub enum Command {
     /// regressed but some pair is not comparable (other scene, resolution, method,
     /// parameters or adapter).
     Compare(CompareArgs),
+    /// Measure the adapter's own ceilings (blended and unblended fill, FP32 compute,
+    /// memory bandwidth, storage atomics, pass and draw overhead) through the harness's
+    /// pass profiler and keep them as the adapter's record under results/ceilings/.
+    Ceilings(CeilingsArgs),
     /// Write a static HTML report (index.html + images) of reproduced experiments.
     Report(ReportArgs),
     /// Print the JSON Schema of a scene, experiment or result file (committed under

@@ -105,6 +105,11 @@ fn main() -> ExitCode {
             }
             Ok(ExitCode::from(r.exit_code()))
         }),
+        Command::Ceilings(args) => caustics::ceilings_cmd::ceilings(&args).map(|(record, path)| {
+            out!("{}", caustics::ceilings_cmd::table(&record));
+            outln!("written to {}", path.display());
+            ExitCode::SUCCESS
+        }),
         Command::Schema { kind } => {
             out!("{}", caustics::schemas::schema_text(kind));
             Ok(ExitCode::SUCCESS)

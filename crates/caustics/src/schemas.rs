@@ -13,14 +13,17 @@ pub enum SchemaKind {
     Experiment,
     /// A run's `result.json`.
     Result,
+    /// An adapter's ceilings record (`results/ceilings/*.json`, `caustics ceilings`).
+    Ceilings,
 }
 
 impl SchemaKind {
     /// Every kind, in the order the README lists them.
-    pub const ALL: [SchemaKind; 3] = [
+    pub const ALL: [SchemaKind; 4] = [
         SchemaKind::Scene,
         SchemaKind::Experiment,
         SchemaKind::Result,
+        SchemaKind::Ceilings,
     ];
 
     /// The committed file's name under `schemas/`.
@@ -29,6 +32,7 @@ impl SchemaKind {
             SchemaKind::Scene => "scene.schema.json",
             SchemaKind::Experiment => "experiment.schema.json",
             SchemaKind::Result => "result.schema.json",
+            SchemaKind::Ceilings => "ceilings.schema.json",
         }
     }
 }
@@ -39,6 +43,7 @@ pub fn schema(kind: SchemaKind) -> serde_json::Value {
         SchemaKind::Scene => return caustics_scene::json_schema(),
         SchemaKind::Experiment => schemars::schema_for!(crate::experiment::ExperimentFile),
         SchemaKind::Result => schemars::schema_for!(crate::result::RunResult),
+        SchemaKind::Ceilings => schemars::schema_for!(crate::ceilings_cmd::CeilingsRecord),
     };
     serde_json::to_value(s).unwrap_or(serde_json::Value::Null)
 }

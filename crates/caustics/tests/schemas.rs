@@ -65,6 +65,7 @@ fn every_committed_file_validates_against_its_schema() {
         (SchemaKind::Result, "results", &|p: &Path| {
             p.file_name().is_some_and(|n| n == "result.json")
         }),
+        (SchemaKind::Ceilings, "results/ceilings", &json),
     ] {
         let (schemas, index) = validator(kind);
         let mut list = Vec::new();

@@ -121,85 +121,160 @@ impl<'a> Frame<'a> {
         name: &str,
         desc: wgpu::RenderPassDescriptor<'_>,
     ) -> Result<ProfiledRenderPass<'_>, GpuError> {
-        let (index, mode) = self.profiler.open_pass(name)?;
-        let ts = self.profiler.timestamp_set(mode);
-        let full = wgpu::RenderPassDescriptor {
-            label: Some(name),
-            color_attachments: desc.color_attachments,
-            depth_stencil_attachment: desc.depth_stencil_attachment,
-            timestamp_writes: ts.map(|query_set| wgpu::RenderPassTimestampWrites {
-                query_set,
-                beginning_of_pass_write_index: Some(2 * index),
-                end_of_pass_write_index: Some(2 * index + 1),
-            }),
-            occlusion_query_set: desc.occlusion_query_set,
-            multiview_mask: desc.multiview_mask,
-        };
-        let mut pass = self.encoder.begin_render_pass(&full);
-        let stats = self.profiler.statistics_set(mode);
-        if let Some(set) = stats {
-            pass.begin_pipeline_statistics_query(set, index);
-        }
-        Ok(ProfiledRenderPass {
-            pass,
-            statistics: stats.is_some(),
-        })
+        open_render_pass(&mut self.encoder, self.profiler, name, desc)
     }
 
     /// Opens a named, profiled compute pass.
     pub fn compute_pass(&mut self, name: &str) -> Result<ProfiledComputePass<'_>, GpuError> {
-        let (index, mode) = self.profiler.open_pass(name)?;
-        let ts = self.profiler.timestamp_set(mode);
-        let mut pass = self
-            .encoder
-            .begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some(name),
-                timestamp_writes: ts.map(|query_set| wgpu::ComputePassTimestampWrites {
-                    query_set,
-                    beginning_of_pass_write_index: Some(2 * index),
-                    end_of_pass_write_index: Some(2 * index + 1),
-                }),
-            });
-        let stats = self.profiler.statistics_set(mode);
-        if let Some(set) = stats {
-            pass.begin_pipeline_statistics_query(set, index);
-        }
-        Ok(ProfiledComputePass {
-            pass,
-            statistics: stats.is_some(),
-        })
+        open_compute_pass(&mut self.encoder, self.profiler, name)
     }
 
     /// Submits the frame, waits for it (frames do not overlap, so each is timed
     /// alone), then resolves its queries in a later submission.
     pub fn submit(self, ctx: &GpuContext) -> Result<(), GpuError> {
-        let Frame {
-            encoder,
-            profiler,
-            started,
-            ..
-        } = self;
-        // Validation and out-of-memory errors of the frame's commands (reported when
-        // the encoder is finished and submitted) become errors, not wgpu's panic.
-        let oom = ctx.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
-        let val = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
-        ctx.queue.submit([encoder.finish()]);
-        let waited = ctx.wait_idle();
-        let wall_ms = started.elapsed().as_secs_f64() * 1e3;
-        let validation = pollster::block_on(val.pop());
-        let memory = pollster::block_on(oom.pop());
-        for (kind, err) in [("validation", validation), ("out of memory", memory)] {
-            if let Some(e) = err {
-                return Err(GpuError::Validation {
-                    kind,
-                    what: "frame submission".into(),
-                    message: e.to_string(),
-                });
-            }
-        }
-        ctx.check_device("frame")?;
-        waited?;
-        profiler.resolve_frame(ctx, wall_ms);
-        Ok(())
+        submit_recorded(ctx, self.encoder, self.profiler, self.started)
     }
+}
+
+/// A frame with no scene: the profiled passes of [`Frame`] without a [`Renderer`], for
+/// work that is measured like a method's pass but draws no scene (the adapter's
+/// ceilings, `caustics-ceilings`). Its passes take the same timestamps and pipeline
+/// statistics as a method's, so a pass and the ceiling it is read against are measured
+/// with one ruler.
+pub struct BareFrame<'a> {
+    /// The frame's command encoder (one submission per frame).
+    pub encoder: wgpu::CommandEncoder,
+    /// Timed or count frame.
+    pub mode: FrameMode,
+    profiler: &'a mut PassProfiler,
+    started: Instant,
+}
+
+impl<'a> BareFrame<'a> {
+    /// Starts a frame measured by `profiler` (`Timed` or `Count`).
+    pub fn begin(
+        ctx: &GpuContext,
+        profiler: &'a mut PassProfiler,
+        mode: FrameMode,
+    ) -> Result<Self, GpuError> {
+        profiler.begin_frame(mode)?;
+        let encoder = ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("bare frame"),
+            });
+        Ok(Self {
+            encoder,
+            mode,
+            profiler,
+            started: Instant::now(),
+        })
+    }
+
+    /// Opens a named, profiled render pass (see [`Frame::render_pass`]).
+    pub fn render_pass(
+        &mut self,
+        name: &str,
+        desc: wgpu::RenderPassDescriptor<'_>,
+    ) -> Result<ProfiledRenderPass<'_>, GpuError> {
+        open_render_pass(&mut self.encoder, self.profiler, name, desc)
+    }
+
+    /// Opens a named, profiled compute pass (see [`Frame::compute_pass`]).
+    pub fn compute_pass(&mut self, name: &str) -> Result<ProfiledComputePass<'_>, GpuError> {
+        open_compute_pass(&mut self.encoder, self.profiler, name)
+    }
+
+    /// Submits the frame and waits for it, as [`Frame::submit`].
+    pub fn submit(self, ctx: &GpuContext) -> Result<(), GpuError> {
+        submit_recorded(ctx, self.encoder, self.profiler, self.started)
+    }
+}
+
+fn open_render_pass<'e>(
+    encoder: &'e mut wgpu::CommandEncoder,
+    profiler: &mut PassProfiler,
+    name: &str,
+    desc: wgpu::RenderPassDescriptor<'_>,
+) -> Result<ProfiledRenderPass<'e>, GpuError> {
+    let (index, mode) = profiler.open_pass(name)?;
+    let ts = profiler.timestamp_set(mode);
+    let full = wgpu::RenderPassDescriptor {
+        label: Some(name),
+        color_attachments: desc.color_attachments,
+        depth_stencil_attachment: desc.depth_stencil_attachment,
+        timestamp_writes: ts.map(|query_set| wgpu::RenderPassTimestampWrites {
+            query_set,
+            beginning_of_pass_write_index: Some(2 * index),
+            end_of_pass_write_index: Some(2 * index + 1),
+        }),
+        occlusion_query_set: desc.occlusion_query_set,
+        multiview_mask: desc.multiview_mask,
+    };
+    let mut pass = encoder.begin_render_pass(&full);
+    let stats = profiler.statistics_set(mode);
+    if let Some(set) = stats {
+        pass.begin_pipeline_statistics_query(set, index);
+    }
+    Ok(ProfiledRenderPass {
+        pass,
+        statistics: stats.is_some(),
+    })
+}
+
+fn open_compute_pass<'e>(
+    encoder: &'e mut wgpu::CommandEncoder,
+    profiler: &mut PassProfiler,
+    name: &str,
+) -> Result<ProfiledComputePass<'e>, GpuError> {
+    let (index, mode) = profiler.open_pass(name)?;
+    let ts = profiler.timestamp_set(mode);
+    let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+        label: Some(name),
+        timestamp_writes: ts.map(|query_set| wgpu::ComputePassTimestampWrites {
+            query_set,
+            beginning_of_pass_write_index: Some(2 * index),
+            end_of_pass_write_index: Some(2 * index + 1),
+        }),
+    });
+    let stats = profiler.statistics_set(mode);
+    if let Some(set) = stats {
+        pass.begin_pipeline_statistics_query(set, index);
+    }
+    Ok(ProfiledComputePass {
+        pass,
+        statistics: stats.is_some(),
+    })
+}
+
+/// Submits a recorded frame, waits for it (frames do not overlap, so each is timed
+/// alone), then resolves its queries in a later submission.
+fn submit_recorded(
+    ctx: &GpuContext,
+    encoder: wgpu::CommandEncoder,
+    profiler: &mut PassProfiler,
+    started: Instant,
+) -> Result<(), GpuError> {
+    // Validation and out-of-memory errors of the frame's commands (reported when
+    // the encoder is finished and submitted) become errors, not wgpu's panic.
+    let oom = ctx.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+    let val = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
+    ctx.queue.submit([encoder.finish()]);
+    let waited = ctx.wait_idle();
+    let wall_ms = started.elapsed().as_secs_f64() * 1e3;
+    let validation = pollster::block_on(val.pop());
+    let memory = pollster::block_on(oom.pop());
+    for (kind, err) in [("validation", validation), ("out of memory", memory)] {
+        if let Some(e) = err {
+            return Err(GpuError::Validation {
+                kind,
+                what: "frame submission".into(),
+                message: e.to_string(),
+            });
+        }
+    }
+    ctx.check_device("frame")?;
+    waited?;
+    profiler.resolve_frame(ctx, wall_ms);
+    Ok(())
 }

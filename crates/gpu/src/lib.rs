@@ -44,7 +44,7 @@ pub use context::{
     ADAPTER_ENV, AdapterChoice, AdapterSummary, GpuContext, OPTIONAL_FEATURES, REQUIRED_FEATURES,
 };
 pub use error::GpuError;
-pub use frame::{Frame, ProfiledComputePass, ProfiledRenderPass};
+pub use frame::{BareFrame, Frame, ProfiledComputePass, ProfiledRenderPass};
 pub use gbuffer::{GBuffer, GBufferPass, ShadowMap};
 pub use impostor::{DistanceImpostor, ImpostorAtlas, ImpostorPass};
 pub use light_view::{LightFace, LightProjection, LightView};

@@ -1,0 +1,310 @@
+//! `caustics ceilings`: the adapter's own ceilings (fill, compute, bandwidth, atomics,
+//! overhead), measured by `caustics-ceilings` and kept as one record per adapter under
+//! `results/ceilings/`, where the passes of later runs are read against them.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, bail};
+use caustics_ceilings::{ProbeKind, ProbeOptions};
+use caustics_gpu::{AdapterChoice, GpuContext};
+use serde::{Deserialize, Serialize};
+
+use crate::machine::{Build, Machine};
+use crate::stats::Summary;
+
+/// Version of the ceilings record's layout.
+pub const CEILINGS_SCHEMA_VERSION: u32 = 1;
+
+/// `caustics ceilings` flags.
+#[derive(clap::Args, Debug, Clone)]
+pub struct CeilingsArgs {
+    /// Substring of the adapter name (see `caustics run --adapter`).
+    #[arg(long)]
+    pub adapter: Option<String>,
+    /// Fill target width (pixels; a multiple of 4).
+    #[arg(long, default_value_t = 1024)]
+    pub width: u32,
+    /// Fill target height (pixels; a multiple of 4).
+    #[arg(long, default_value_t = 768)]
+    pub height: u32,
+    /// Timed trials per probe, after one warm-up.
+    #[arg(long, default_value_t = 9)]
+    pub trials: u32,
+    /// Each probe is scaled up until one trial takes at least this long (ms).
+    #[arg(long, default_value_t = 20.0)]
+    pub target_ms: f64,
+    /// Size of each bandwidth buffer (MiB; lowered to the device's largest storage binding).
+    #[arg(long, default_value_t = 64)]
+    pub bandwidth_mib: u64,
+    /// Run only the probes whose names contain this (repeatable); the record then holds
+    /// only those.
+    #[arg(long)]
+    pub only: Vec<String>,
+    /// Folder of the per-adapter records.
+    #[arg(long, default_value = "results/ceilings")]
+    pub out: PathBuf,
+}
+
+/// One probe in the record.
+#[derive(Clone, Debug, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct CeilingEntry {
+    /// Stable probe name, e.g. `fill_blend_rgba32f_fullscreen`.
+    pub name: String,
+    /// What it measures.
+    pub what: String,
+    /// Unit of `figure`: a throughput (e.g. `Gfragments/s`, `GB/s`; higher is better)
+    /// or a time per item (`us/pass`, `us/draw`; lower is better).
+    pub unit: String,
+    /// Whether `figure` is a throughput (`throughput`) or a time per item (`per_item`).
+    pub kind: String,
+    /// The ceiling: the figure of each trial, summarized (the median is the ceiling).
+    pub figure: Summary,
+    /// `(p90 − p10) / median` of the figure: how repeatable the ceiling is.
+    pub spread: f64,
+    /// Work of one trial (closed form), in `work_unit`.
+    pub work: f64,
+    /// Unit of `work`.
+    pub work_unit: String,
+    /// The same work from pipeline statistics, where the adapter counts it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub counted_work: Option<f64>,
+    /// Scale the probe was calibrated to (layers, loop trips, dispatches or draws).
+    pub scale: u32,
+    /// GPU time of one trial (ms).
+    pub trial_ms: Summary,
+}
+
+/// The ceilings of one adapter.
+#[derive(Clone, Debug, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct CeilingsRecord {
+    /// Layout version ([`CEILINGS_SCHEMA_VERSION`]).
+    pub schema_version: u32,
+    /// The binary that measured them.
+    pub build: Build,
+    /// The adapter and machine.
+    pub machine: Machine,
+    /// Fill target size (pixels).
+    pub width: u32,
+    /// Fill target height (pixels).
+    pub height: u32,
+    /// Timed trials per probe.
+    pub trials: u32,
+    /// Calibration target per trial (ms).
+    pub target_ms: f64,
+    /// The probes.
+    pub ceilings: Vec<CeilingEntry>,
+}
+
+impl CeilingsRecord {
+    /// The entry named `name`.
+    pub fn get(&self, name: &str) -> Option<&CeilingEntry> {
+        self.ceilings.iter().find(|c| c.name == name)
+    }
+}
+
+/// The record file of an adapter: its name and driver version, as a file name.
+pub fn record_path(dir: &Path, machine: &Machine) -> PathBuf {
+    let slug: String = format!("{} {}", machine.adapter, machine.driver_info)
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() {
+                c.to_ascii_lowercase()
+            } else {
+                '-'
+            }
+        })
+        .collect::<String>()
+        .split('-')
+        .filter(|s| !s.is_empty())
+        .collect::<Vec<_>>()
+        .join("-");
+    dir.join(format!("{slug}.json"))
+}
+
+/// Reads and checks a ceilings record: it must parse, have this layout version, and
+/// every figure must be positive and finite.
+pub fn load(path: &Path) -> Result<CeilingsRecord> {
+    let text = std::fs::read_to_string(path)
+        .with_context(|| format!("reading ceilings record {}", path.display()))?;
+    let de = &mut serde_json::Deserializer::from_str(&text);
+    let record: CeilingsRecord = serde_path_to_error::deserialize(de).map_err(|e| {
+        anyhow::anyhow!(
+            "ceilings record {}: field `{}`: {}",
+            path.display(),
+            e.path(),
+            e.inner()
+        )
+    })?;
+    if record.schema_version != CEILINGS_SCHEMA_VERSION {
+        bail!(
+            "ceilings record {}: field `schema_version`: expected {CEILINGS_SCHEMA_VERSION}, got {} (re-run `caustics ceilings`)",
+            path.display(),
+            record.schema_version
+        );
+    }
+    for (i, c) in record.ceilings.iter().enumerate() {
+        if !(c.figure.median.is_finite() && c.figure.median > 0.0) {
+            bail!(
+                "ceilings record {}: field `ceilings[{i}].figure.median` ({}): expected a positive number, got {}",
+                path.display(),
+                c.name,
+                c.figure.median
+            );
+        }
+    }
+    Ok(record)
+}
+
+/// The cached record of `machine`'s adapter under `dir`, if one was measured: `None`
+/// when there is none, an error when there is one that cannot be read.
+pub fn cached(dir: &Path, machine: &Machine) -> Result<Option<CeilingsRecord>> {
+    let path = record_path(dir, machine);
+    if !path.exists() {
+        return Ok(None);
+    }
+    load(&path).map(Some)
+}
+
+/// Measures the ceilings and writes the record (atomically, over an earlier one of the
+/// same adapter); returns it and its path.
+pub fn ceilings(args: &CeilingsArgs) -> Result<(CeilingsRecord, PathBuf)> {
+    let options = ProbeOptions {
+        width: args.width,
+        height: args.height,
+        trials: args.trials,
+        target_ms: args.target_ms,
+        bandwidth_bytes: args.bandwidth_mib.saturating_mul(1 << 20),
+        only: args.only.clone(),
+    };
+    options
+        .validate()
+        .map_err(|e| anyhow::anyhow!("caustics ceilings --{}", e.to_string().replace('_', "-")))?;
+    let ctx = GpuContext::new(&AdapterChoice::from_flag_or_env(args.adapter.as_deref()))?;
+    let machine = crate::machine::machine(&ctx.summary);
+    let build = crate::machine::build();
+    if build.profile != "release" {
+        eprintln!(
+            "warning: a {} build: the ceilings of an unoptimized harness are still the device's, but report release builds",
+            build.profile
+        );
+    }
+    let probes = caustics_ceilings::measure(&ctx, &options, &mut |name| {
+        eprintln!("  {name}");
+    })
+    .with_context(|| format!("measuring the ceilings of {}", ctx.summary.name))?;
+    if probes.is_empty() {
+        bail!(
+            "caustics ceilings --only {:?}: no probe name contains it",
+            args.only
+        );
+    }
+    let mut entries = Vec::with_capacity(probes.len());
+    for p in &probes {
+        let figures: Vec<f64> = p.trial_ms.iter().map(|&ms| p.figure(ms)).collect();
+        let figure = crate::stats::summarize(&figures)
+            .with_context(|| format!("probe {}: no trials", p.name))?;
+        let trial_ms = crate::stats::summarize(&p.trial_ms)
+            .with_context(|| format!("probe {}: no trials", p.name))?;
+        entries.push(CeilingEntry {
+            name: p.name.to_owned(),
+            what: p.what.to_owned(),
+            unit: p.unit.to_owned(),
+            kind: match p.kind {
+                ProbeKind::Throughput => "throughput",
+                ProbeKind::PerItem => "per_item",
+            }
+            .to_owned(),
+            spread: (figure.p90 - figure.p10) / figure.median,
+            figure,
+            work: p.work,
+            work_unit: p.work_unit.to_owned(),
+            counted_work: p.counted_work,
+            scale: p.scale,
+            trial_ms,
+        });
+    }
+    let record = CeilingsRecord {
+        schema_version: CEILINGS_SCHEMA_VERSION,
+        build,
+        machine,
+        width: args.width,
+        height: args.height,
+        trials: args.trials,
+        target_ms: args.target_ms,
+        ceilings: entries,
+    };
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("creating {}", args.out.display()))?;
+    let path = record_path(&args.out, &record.machine);
+    let mut json = serde_json::to_vec_pretty(&record)?;
+    json.push(b'\n');
+    caustics_metrics::atomic_write(&path, &json)
+        .with_context(|| format!("writing {}", path.display()))?;
+    Ok((record, path))
+}
+
+/// The record as a table.
+pub fn table(record: &CeilingsRecord) -> String {
+    let mut s = format!(
+        "Ceilings of {} ({}, {}), {} trials each:\n\n| probe | ceiling (median) | p10–p90 | spread | trial ms | work per trial |\n|---|---|---|---|---|---|\n",
+        record.machine.adapter, record.machine.backend, record.machine.driver_info, record.trials
+    );
+    for c in &record.ceilings {
+        s.push_str(&format!(
+            "| {} | {:.4} {} | {:.4}–{:.4} | {:.1} % | {:.2} | {:.4e} {} |\n",
+            c.name,
+            c.figure.median,
+            c.unit,
+            c.figure.p10,
+            c.figure.p90,
+            100.0 * c.spread,
+            c.trial_ms.median,
+            c.work,
+            c.work_unit
+        ));
+    }
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn machine() -> Machine {
+        Machine {
+            adapter: "llvmpipe (LLVM 15.0.6, 256 bits)".into(),
+            backend: "Vulkan".into(),
+            device_type: "Cpu".into(),
+            driver: "llvmpipe".into(),
+            driver_info: "Mesa 22.3.6 (LLVM 15.0.6)".into(),
+            cpu: "x".into(),
+            cpu_threads: 2,
+            os: "linux".into(),
+        }
+    }
+
+    #[test]
+    fn the_record_file_is_named_after_adapter_and_driver() {
+        let p = record_path(Path::new("c"), &machine());
+        assert_eq!(
+            p,
+            Path::new("c/llvmpipe-llvm-15-0-6-256-bits-mesa-22-3-6-llvm-15-0-6.json")
+        );
+    }
+
+    #[test]
+    fn a_bad_record_names_the_file_and_field() {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let path = dir.path().join("r.json");
+        std::fs::write(&path, r#"{"schema_version": 1, "build": 3}"#).expect("write");
+        let e = format!("{:#}", load(&path).expect_err("bad build"));
+        assert!(e.contains("r.json") && e.contains("field `build`"), "{e}");
+        std::fs::write(&path, "not json").expect("write");
+        let e = format!("{:#}", load(&path).expect_err("not json"));
+        assert!(e.contains("r.json"), "{e}");
+        assert!(
+            cached(dir.path(), &machine()).expect("no record").is_none(),
+            "no record of this adapter is None, not an error"
+        );
+    }
+}
