@@ -11,8 +11,11 @@ struct ComputeParams {
     stride: u32,
     // Counters of the atomics kernel minus one (a power of two minus one).
     counter_mask: u32,
-    // Padding to 16 bytes' multiple, as the Rust side lays it out.
-    sink: u32,
+    // To 32 bytes, as the Rust side lays it out.
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
+    _pad3: u32,
 }
 
 @group(0) @binding(0) var<uniform> params: ComputeParams;

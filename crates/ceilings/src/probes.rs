@@ -489,8 +489,10 @@ struct ComputeParams {
     iterations: u32,
     stride: u32,
     counter_mask: u32,
-    sink: u32,
-    _pad: [u32; 3],
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
+    _pad3: u32,
 }
 
 /// Invocations of the FP32 and atomics probes per dispatch (1,024 workgroups of 256).
@@ -532,8 +534,10 @@ impl<'c> ComputeProbes<'c> {
                     iterations: FP32_ITERATIONS,
                     stride: GATHER_STRIDE,
                     counter_mask: ATOMIC_COUNTERS - 1,
-                    sink: 0,
-                    _pad: [0; 3],
+                    _pad0: 0,
+                    _pad1: 0,
+                    _pad2: 0,
+                    _pad3: 0,
                 }),
                 usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             },
@@ -715,4 +719,35 @@ impl<'c> ComputeProbes<'c> {
 fn groups_2d(groups: u32) -> [u32; 2] {
     let x = groups.clamp(1, 1 << 15);
     [x, groups.div_ceil(x).max(1)]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use caustics_gpu::assert_wgsl_layout;
+
+    #[test]
+    fn probe_uniforms_match_their_wgsl() {
+        assert_wgsl_layout!(
+            FILL_WGSL,
+            FillParams {
+                target_px,
+                cell_px,
+                cells_x
+            }
+        );
+        assert_wgsl_layout!(
+            COMPUTE_WGSL,
+            ComputeParams {
+                elements,
+                iterations,
+                stride,
+                counter_mask,
+                _pad0,
+                _pad1,
+                _pad2,
+                _pad3
+            }
+        );
+    }
 }
