@@ -12,6 +12,9 @@ use serde::{Deserialize, Serialize};
 use crate::machine::{Build, Machine};
 use crate::stats::Summary;
 
+/// Where `caustics ceilings` writes and `caustics run` reads the records.
+pub const DEFAULT_ROOT: &str = "results/ceilings";
+
 /// Version of the ceilings record's layout.
 pub const CEILINGS_SCHEMA_VERSION: u32 = 1;
 
@@ -41,7 +44,7 @@ pub struct CeilingsArgs {
     #[arg(long)]
     pub only: Vec<String>,
     /// Folder of the per-adapter records.
-    #[arg(long, default_value = "results/ceilings")]
+    #[arg(long, default_value = DEFAULT_ROOT)]
     pub out: PathBuf,
 }
 

@@ -65,6 +65,7 @@ pub mod report;
 pub mod reproduce;
 pub mod result;
 pub mod resume;
+pub mod roofline;
 pub mod run;
 pub mod schemas;
 pub mod stats;

@@ -149,14 +149,23 @@ fn print_summary(dir: &std::path::Path, r: &caustics::result::RunResult) {
         r.machine.adapter,
         r.build.profile
     );
+    let bound = |name: &str| {
+        r.roofline
+            .as_ref()
+            .and_then(|rl| rl.passes.iter().find(|p| p.name == name))
+            .map_or(String::new(), |p| {
+                format!("  {} {:.1}%", p.bound.as_str(), 100.0 * p.fraction)
+            })
+    };
     for p in &r.timing.passes {
         match &p.gpu_ms {
             Some(s) => outln!(
-                "  {:<32} {:>9.3} ms  (p10 {:.3}, p90 {:.3})",
+                "  {:<32} {:>9.3} ms  (p10 {:.3}, p90 {:.3}){}",
                 p.name,
                 s.median,
                 s.p10,
-                s.p90
+                s.p90,
+                bound(&p.name)
             ),
             None => outln!("  {:<32} {:>9} (no timestamps)", p.name, "-"),
         }

@@ -51,6 +51,10 @@ pub struct ReproduceArgs {
     /// Reference cache root.
     #[arg(long, value_name = "DIR", default_value = crate::references::DEFAULT_ROOT)]
     pub references: PathBuf,
+    /// Ceilings records: the adapter's record there gives each run's passes their
+    /// roofline (`caustics ceilings` measures one).
+    #[arg(long, value_name = "DIR", default_value = crate::ceilings_cmd::DEFAULT_ROOT)]
+    pub ceilings: PathBuf,
     /// Do not render missing references even where the experiment gives a photon
     /// budget (runs without a reference are made without errors).
     #[arg(long)]
@@ -563,6 +567,7 @@ fn run_one(e: &Experiment, spec: &RunSpec, args: &ReproduceArgs, out: &Path) -> 
         references: args.references.clone(),
         // The experiment's budget decides its references (`ensure_references`).
         quick_reference_photons: 0,
+        ceilings: args.ceilings.clone(),
     };
     let status = |status: &str, dir: Option<String>, reason: Option<String>| RunStatus {
         index: spec.index,

@@ -59,6 +59,11 @@ pub struct RunResult {
     /// method shows in real time). `errors_1spp − errors` is the camera-aliasing share.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub errors_1spp: Option<ErrorReport>,
+    /// Each pass against the adapter's measured ceilings (`caustics ceilings`): the
+    /// fraction of each ceiling it reaches and the bound it is nearest. Absent when no
+    /// ceilings record of the adapter exists (or in files before it existed).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub roofline: Option<crate::roofline::RooflineReport>,
 }
 
 impl RunResult {

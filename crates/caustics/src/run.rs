@@ -81,6 +81,10 @@ pub struct RunOptions {
     /// a converged one over it). 0: render none, the run then has no errors.
     #[arg(long, value_name = "N", default_value_t = QUICK_REFERENCE_PHOTONS)]
     pub quick_reference_photons: u64,
+    /// Ceilings records (`caustics ceilings`); the adapter's record there, when one
+    /// exists, gives every pass its roofline in result.json.
+    #[arg(long, value_name = "DIR", default_value = crate::ceilings_cmd::DEFAULT_ROOT)]
+    pub ceilings: PathBuf,
 }
 
 /// Mean relative standard error per caustic pixel above which `run` says its reference
@@ -280,6 +284,8 @@ pub fn run_scene(o: &RunOptions, scene: Scene) -> Result<RunOutcome> {
     let count_frame = samples.last().context("no count frame recorded")?;
     let timing = timing(measured, profiler.has_timestamps(), &o.method);
     let fragments = fragments(count_frame, &fill, &o.method);
+    let run_machine = machine::machine(&ctx.summary);
+    let roofline = crate::roofline::for_run(&o.ceilings, &run_machine, &timing, count_frame)?;
 
     let dir = o.out.join(&scene.name).join(&o.method);
     std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
@@ -367,7 +373,7 @@ pub fn run_scene(o: &RunOptions, scene: Scene) -> Result<RunOutcome> {
     let result = RunResult {
         schema_version: SCHEMA_VERSION,
         build: machine::build(),
-        machine: machine::machine(&ctx.summary),
+        machine: run_machine,
         scene: SceneInfo {
             name: scene.name.clone(),
             file: machine::portable_path(&scene.source),
@@ -400,6 +406,7 @@ pub fn run_scene(o: &RunOptions, scene: Scene) -> Result<RunOutcome> {
         scoring: Some(scoring),
         errors,
         errors_1spp,
+        roofline,
     };
     let json = serde_json::to_vec_pretty(&result)?;
     caustics_metrics::atomic_write(&dir.join("result.json"), &json)?;

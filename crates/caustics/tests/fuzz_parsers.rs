@@ -382,6 +382,7 @@ fn mutated_experiment_result_manifest_and_summary_files_never_panic_and_name_the
         out: t.join("out"),
         shard: None,
         references: t.join("refs"),
+        ceilings: t.join("ceilings"),
         no_render_references: false,
         experiments: Some(exp.clone()),
         adapter: None,

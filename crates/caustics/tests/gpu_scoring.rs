@@ -4,7 +4,8 @@
 //! times and stores the pixel-averaged and the 1-spp errors side by side; the errors
 //! against a reference (given, or found in the cache by scene hash) say "identical" for
 //! the image itself and tell scale from shape; a reference of the wrong size is refused
-//! before any write. Runs on lavapipe on CI; without an adapter it fails with the install
+//! before any write; with the adapter's ceilings record beside it, every timed pass of
+//! every method is read against it (its roofline). Runs on lavapipe on CI; without an adapter it fails with the install
 //! hint. (Each method's accuracy is tested in its own crate, `tests/accuracy.rs`.)
 
 mod common;
@@ -15,9 +16,30 @@ use caustics::run::run;
 use caustics_metrics::{HdrImage, read_exr};
 use common::{run_dir, run_options, small_scene};
 
+/// The committed ceilings record, filed under this adapter's name in `dir` (CI's Mesa
+/// may differ from the machine that measured it: the figures only need to be real).
+fn ceilings_for_this_adapter(dir: &std::path::Path) {
+    let committed = std::fs::read_dir(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../results/ceilings"),
+    )
+    .expect("results/ceilings")
+    .filter_map(Result::ok)
+    .map(|e| e.path())
+    .find(|p| p.extension().is_some_and(|e| e == "json"))
+    .expect("a committed ceilings record");
+    let ctx = caustics_gpu::GpuContext::new(&caustics_gpu::AdapterChoice::from_flag_or_env(None))
+        .unwrap_or_else(|e| panic!("{e}"));
+    let machine = caustics::machine::machine(&ctx.summary);
+    let path = caustics::ceilings_cmd::record_path(dir, &machine);
+    std::fs::create_dir_all(dir).expect("ceilings dir");
+    std::fs::copy(&committed, &path).expect("copy the record");
+}
+
 #[test]
 fn every_method_repeats_its_timed_frame_at_the_pixel_centre() {
     let tmp = tempfile::tempdir().expect("tempdir");
+    let ceilings = tmp.path().join("ceilings");
+    ceilings_for_this_adapter(&ceilings);
     let scenes = ["sphere_on_plane", "fog_sphere"].map(|s| small_scene(tmp.path(), s, 32, 24));
     for info in caustics::registry::methods() {
         // The first of the two scenes the method renders (fog_sphere has volume caustics).
@@ -33,7 +55,9 @@ fn every_method_repeats_its_timed_frame_at_the_pixel_centre() {
         };
         let mut o = run_options(scene, &tmp.path().join("runs"), info.name, &[]);
         (o.warmup, o.frames, o.score_grid) = (1, 2, 1);
+        o.ceilings = ceilings.clone();
         let (dir, result) = run_dir(&o);
+        check_roofline(&result);
         let scoring = result.scoring.as_ref().expect("scoring info");
         assert_eq!((scoring.grid, scoring.samples_per_pixel), (1, 1));
         let mut images = vec!["surface"];
@@ -49,6 +73,75 @@ fn every_method_repeats_its_timed_frame_at_the_pixel_centre() {
                 info.name
             );
         }
+    }
+}
+
+/// Every pass with a positive median time is read against the ceilings, in recording
+/// order; render passes with counted fragments get a fill share, compute passes their
+/// invocation rate, and the bound is the largest share's kind (or `shader`).
+fn check_roofline(result: &RunResult) {
+    use caustics_ceilings::roofline::{BOUND_SHARE, Bound};
+    let method = &result.method.name;
+    let roofline = result
+        .roofline
+        .as_ref()
+        .unwrap_or_else(|| panic!("{method}: no roofline with a ceilings record"));
+    let timed: Vec<&str> = result
+        .timing
+        .passes
+        .iter()
+        .filter(|p| p.gpu_ms.as_ref().is_some_and(|s| s.median > 0.0))
+        .map(|p| p.name.as_str())
+        .collect();
+    let read: Vec<&str> = roofline.passes.iter().map(|p| p.name.as_str()).collect();
+    assert_eq!(read, timed, "{method}: every timed pass, in order");
+    let fragments = result
+        .fragments
+        .as_ref()
+        .expect("lavapipe counts fragments");
+    for p in &roofline.passes {
+        let shares = [&p.fill, &p.bandwidth, &p.overhead];
+        let largest = shares
+            .iter()
+            .filter_map(|s| s.as_ref().map(|s| s.fraction))
+            .fold(0.0, f64::max);
+        assert!(
+            p.fraction.is_finite() && p.fraction >= 0.0,
+            "{method} {}",
+            p.name
+        );
+        assert_eq!(p.fraction, largest, "{method} {}", p.name);
+        assert_eq!(
+            p.bound == Bound::Shader,
+            largest < BOUND_SHARE,
+            "{method} {}: bound {:?} at {largest}",
+            p.name,
+            p.bound
+        );
+        let counted = fragments
+            .passes
+            .iter()
+            .find(|f| f.name == p.name)
+            .expect("counted");
+        if counted.compute_shader_invocations > 0 {
+            assert!(
+                p.invocations_per_s.is_some_and(|r| r > 0.0),
+                "{method} {}",
+                p.name
+            );
+            assert!(
+                p.fill.is_none(),
+                "{method} {}: a compute pass has no fill",
+                p.name
+            );
+        } else {
+            let fill = p
+                .fill
+                .as_ref()
+                .unwrap_or_else(|| panic!("{method} {}: no fill share", p.name));
+            assert_eq!(fill.work, counted.fragment_shader_invocations as f64);
+        }
+        assert!(p.overhead.is_some(), "{method} {}", p.name);
     }
 }
 

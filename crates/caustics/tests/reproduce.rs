@@ -42,6 +42,7 @@ fn args(tmp: &Path, exp: &Path, out: &str, shard: Option<&str>) -> ReproduceArgs
         out: tmp.join(out),
         shard: shard.map(str::to_owned),
         references: tmp.join("references"),
+        ceilings: tmp.join("ceilings"),
         no_render_references: false,
         experiments: Some(exp.to_path_buf()),
         adapter: None,

@@ -17,6 +17,7 @@
 //! | `fill_unblended_rgba32f_fullscreen` | full-screen triangles, no blending | Gfragments/s |
 //! | `compute_fp32` | independent FMA chains | GFLOP/s |
 //! | `bandwidth_copy` | sequential vec4 copy (bytes read + written) | GB/s |
+//! | `bandwidth_clear` | render passes that clear an RGBA32F target, no draws (bytes written) | GB/s |
 //! | `bandwidth_strided` | gather with a 528-byte stride, sequential writes | GB/s |
 //! | `atomics_storage` | `atomicAdd` on 65,536 hashed u32 counters | Gatomics/s |
 //! | `overhead_pass` | 64 empty compute passes | µs per pass |
@@ -31,6 +32,7 @@
 use caustics_gpu::{BareFrame, FrameMode, GpuContext, GpuError, PassProfiler};
 
 mod probes;
+pub mod roofline;
 
 pub use probes::{ProbeKind, ProbeResult, measure};
 

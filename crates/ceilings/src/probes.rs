@@ -427,8 +427,55 @@ impl<'c> FillProbes<'c> {
             per_invocation: None,
             max_scale: 1 << 10,
         });
+        let view = &self.rgba32f;
+        out.push(Probe {
+            name: "bandwidth_clear",
+            what: "render passes that clear the RGBA32F target and draw nothing, first start to last end: bytes written per second (what a pass's cleared attachments cost)",
+            kind: ProbeKind::Throughput,
+            unit: "GB/s",
+            work_unit: "bytes",
+            record: Box::new(move |frame: &mut BareFrame<'_>, passes: u32| {
+                for _ in 0..passes {
+                    clear_pass(frame, "bandwidth_clear", view)?;
+                }
+                Ok(())
+            }),
+            work: Box::new(move |passes| pixels * 16.0 * f64::from(passes)),
+            per_invocation: None,
+            // One profiled pass per clear: at most a frame's passes.
+            max_scale: OVERHEAD_PASSES,
+        });
         out
     }
+}
+
+/// A render pass that clears `view` and draws nothing.
+fn clear_pass(
+    frame: &mut BareFrame<'_>,
+    name: &str,
+    view: &wgpu::TextureView,
+) -> Result<(), GpuError> {
+    let attachments = [Some(wgpu::RenderPassColorAttachment {
+        view,
+        depth_slice: None,
+        resolve_target: None,
+        ops: wgpu::Operations {
+            load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+            store: wgpu::StoreOp::Store,
+        },
+    })];
+    frame.render_pass(
+        name,
+        wgpu::RenderPassDescriptor {
+            label: Some(name),
+            color_attachments: &attachments,
+            depth_stencil_attachment: None,
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        },
+    )?;
+    Ok(())
 }
 
 /// A pipeline error is built once and reported by every trial that needs it.

@@ -6,7 +6,7 @@
 use std::ops::{Deref, DerefMut};
 use std::time::Instant;
 
-use crate::profiling::{FrameMode, PassProfiler};
+use crate::profiling::{FrameMode, PassProfiler, PassShape};
 use crate::renderer::Renderer;
 use crate::{GpuContext, GpuError};
 
@@ -121,7 +121,19 @@ impl<'a> Frame<'a> {
         name: &str,
         desc: wgpu::RenderPassDescriptor<'_>,
     ) -> Result<ProfiledRenderPass<'_>, GpuError> {
-        open_render_pass(&mut self.encoder, self.profiler, name, desc)
+        open_render_pass(&mut self.encoder, self.profiler, name, desc, None)
+    }
+
+    /// [`Frame::render_pass`] for a pass whose pipeline's blending is known (the pass
+    /// layer's [`crate::pass::RasterPass`]), so its roofline picks the right fill
+    /// ceiling.
+    pub(crate) fn render_pass_blending(
+        &mut self,
+        name: &str,
+        desc: wgpu::RenderPassDescriptor<'_>,
+        blended: bool,
+    ) -> Result<ProfiledRenderPass<'_>, GpuError> {
+        open_render_pass(&mut self.encoder, self.profiler, name, desc, Some(blended))
     }
 
     /// Opens a named, profiled compute pass.
@@ -177,7 +189,19 @@ impl<'a> BareFrame<'a> {
         name: &str,
         desc: wgpu::RenderPassDescriptor<'_>,
     ) -> Result<ProfiledRenderPass<'_>, GpuError> {
-        open_render_pass(&mut self.encoder, self.profiler, name, desc)
+        open_render_pass(&mut self.encoder, self.profiler, name, desc, None)
+    }
+
+    /// [`BareFrame::render_pass`] whose pipelines write its first target with
+    /// blending (`blended`) or without: the pass's [`crate::PassShape`] then says so,
+    /// as a [`crate::pass::RasterPass`]'s does.
+    pub fn render_pass_blending(
+        &mut self,
+        name: &str,
+        desc: wgpu::RenderPassDescriptor<'_>,
+        blended: bool,
+    ) -> Result<ProfiledRenderPass<'_>, GpuError> {
+        open_render_pass(&mut self.encoder, self.profiler, name, desc, Some(blended))
     }
 
     /// Opens a named, profiled compute pass (see [`Frame::compute_pass`]).
@@ -196,8 +220,41 @@ fn open_render_pass<'e>(
     profiler: &mut PassProfiler,
     name: &str,
     desc: wgpu::RenderPassDescriptor<'_>,
+    blended: Option<bool>,
 ) -> Result<ProfiledRenderPass<'e>, GpuError> {
-    let (index, mode) = profiler.open_pass(name)?;
+    let color_format = desc
+        .color_attachments
+        .iter()
+        .flatten()
+        .next()
+        .map(|a| a.view.texture().format());
+    let texture_bytes = |t: &wgpu::Texture, aspect: Option<wgpu::TextureAspect>| {
+        let texel = t.format().block_copy_size(aspect).unwrap_or(4);
+        u64::from(t.width()) * u64::from(t.height()) * u64::from(texel)
+    };
+    let colour_cleared = desc
+        .color_attachments
+        .iter()
+        .flatten()
+        .filter(|a| matches!(a.ops.load, wgpu::LoadOp::Clear(_)))
+        .map(|a| texture_bytes(a.view.texture(), None))
+        .sum::<u64>();
+    let depth_cleared = desc.depth_stencil_attachment.as_ref().map_or(0, |d| {
+        let cleared = d
+            .depth_ops
+            .is_some_and(|o| matches!(o.load, wgpu::LoadOp::Clear(_)));
+        if cleared {
+            texture_bytes(d.view.texture(), Some(wgpu::TextureAspect::DepthOnly))
+        } else {
+            0
+        }
+    });
+    let shape = PassShape::Render {
+        color_format,
+        blended: color_format.and(blended),
+        cleared_bytes: colour_cleared + depth_cleared,
+    };
+    let (index, mode) = profiler.open_pass(name, shape)?;
     let ts = profiler.timestamp_set(mode);
     let full = wgpu::RenderPassDescriptor {
         label: Some(name),
@@ -227,7 +284,7 @@ fn open_compute_pass<'e>(
     profiler: &mut PassProfiler,
     name: &str,
 ) -> Result<ProfiledComputePass<'e>, GpuError> {
-    let (index, mode) = profiler.open_pass(name)?;
+    let (index, mode) = profiler.open_pass(name, PassShape::Compute)?;
     let ts = profiler.timestamp_set(mode);
     let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
         label: Some(name),

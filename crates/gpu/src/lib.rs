@@ -48,7 +48,7 @@ pub use frame::{BareFrame, Frame, ProfiledComputePass, ProfiledRenderPass};
 pub use gbuffer::{GBuffer, GBufferPass, ShadowMap};
 pub use impostor::{DistanceImpostor, ImpostorAtlas, ImpostorPass};
 pub use light_view::{LightFace, LightProjection, LightView};
-pub use profiling::{FrameMode, FrameSample, PassProfiler, PassSample, PassStatistics};
+pub use profiling::{FrameMode, FrameSample, PassProfiler, PassSample, PassShape, PassStatistics};
 pub use renderer::{Renderer, RendererOptions};
 pub use scene_upload::GpuScene;
 pub use scoring::{ScoreAccumulator, ScoredImages, subpixel_offsets};

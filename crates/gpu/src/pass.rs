@@ -865,6 +865,8 @@ pub struct RasterPass {
     schemas: BTreeMap<u32, BindGroupSchema>,
     timed: wgpu::RenderPipeline,
     counting: Option<wgpu::RenderPipeline>,
+    /// Whether the first colour target blends (for the roofline's fill ceiling).
+    blended: bool,
 }
 
 /// What a raster pass declares: its stages, targets and fixed-function state.
@@ -958,7 +960,7 @@ impl RasterPass {
             (Some(counting), true) => counting,
             _ => &self.timed,
         };
-        let mut pass = frame.render_pass(
+        let mut pass = frame.render_pass_blending(
             name,
             wgpu::RenderPassDescriptor {
                 label: None,
@@ -968,6 +970,7 @@ impl RasterPass {
                 occlusion_query_set: None,
                 multiview_mask: None,
             },
+            self.blended,
         )?;
         pass.set_pipeline(pipeline);
         set_groups(&mut *pass, &self.sources, renderer);
@@ -1049,6 +1052,11 @@ impl<'a> RasterPassBuilder<'a> {
             depth_stencil,
             counted,
         } = self.spec;
+        let blended = targets
+            .iter()
+            .flatten()
+            .next()
+            .is_some_and(|t| t.blend.is_some());
         self.ctx.checked(&format!("pass {name}"), || {
             let built = groups.build(&name)?;
             let pipeline = |constants: &[(&str, f64)]| {
@@ -1091,6 +1099,7 @@ impl<'a> RasterPassBuilder<'a> {
                 schemas: built.schemas,
                 timed,
                 counting,
+                blended,
             })
         })?
     }

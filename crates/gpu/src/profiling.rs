@@ -53,11 +53,32 @@ pub struct PassStatistics {
     pub compute_invocations: u64,
 }
 
+/// What a pass writes, as far as its roofline needs it (which fill ceiling applies).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PassShape {
+    /// A compute pass.
+    Compute,
+    /// A render pass.
+    Render {
+        /// Format of its first colour attachment; `None` for a depth-only pass.
+        color_format: Option<wgpu::TextureFormat>,
+        /// Whether that target is written with blending: known for passes built with
+        /// the pass layer ([`crate::pass::RasterPass`]), `None` for a render pass opened
+        /// directly (its pipelines are set afterwards, out of the profiler's sight).
+        blended: Option<bool>,
+        /// Bytes of the attachments the pass clears (every texel written however few
+        /// fragments it draws).
+        cleared_bytes: u64,
+    },
+}
+
 /// One pass of one measured frame.
 #[derive(Clone, Debug)]
 pub struct PassSample {
     /// Pass name, `"<owner>/<pass>"`.
     pub name: String,
+    /// Compute or render, and its target.
+    pub shape: PassShape,
     /// GPU time (ms) from the pass's timestamps; `None` when the adapter has no
     /// timestamps, or the sample was rejected (zero or non-monotonic timestamps).
     pub gpu_ms: Option<f64>,
@@ -82,7 +103,7 @@ pub struct FrameSample {
 
 struct FrameRecord {
     mode: FrameMode,
-    passes: Vec<String>,
+    passes: Vec<(String, PassShape)>,
     wall_ms: f64,
 }
 
@@ -179,7 +200,11 @@ impl PassProfiler {
     }
 
     /// Registers a pass; returns its index in the frame.
-    pub(crate) fn open_pass(&mut self, name: &str) -> Result<(u32, FrameMode), GpuError> {
+    pub(crate) fn open_pass(
+        &mut self,
+        name: &str,
+        shape: PassShape,
+    ) -> Result<(u32, FrameMode), GpuError> {
         let rec = self
             .open
             .as_mut()
@@ -189,7 +214,7 @@ impl PassProfiler {
                 "more than {MAX_PASSES_PER_FRAME} passes in a frame"
             )));
         }
-        rec.passes.push(name.to_owned());
+        rec.passes.push((name.to_owned(), shape));
         Ok((rec.passes.len() as u32 - 1, rec.mode))
     }
 
@@ -266,9 +291,10 @@ impl PassProfiler {
                 .passes
                 .into_iter()
                 .enumerate()
-                .map(|(p, name)| {
+                .map(|(p, (name, shape))| {
                     let mut sample = PassSample {
                         name,
+                        shape,
                         gpu_ms: None,
                         ticks: None,
                         statistics: None,

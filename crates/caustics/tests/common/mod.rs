@@ -46,6 +46,7 @@ pub(crate) fn run_options(scene: &Path, out: &Path, method: &str, params: &[&str
         score_grid: 1,
         references: out.join("no-reference-cache"),
         quick_reference_photons: 0,
+        ceilings: out.join("no-ceilings"),
     }
 }
 
