@@ -848,6 +848,65 @@ pub fn error_axes() -> [ErrorAxis; 4] {
     ]
 }
 
+/// The fill roofline's series: one set of points per method (its render passes that
+/// rasterized anything), then the roof of the first run that has one, sampled across
+/// the points' span. `None` when no run has a roofline with render passes.
+fn fill_roofline_series<'r>(
+    done: &[&'r Row],
+    methods: &[String],
+) -> Option<(Vec<Series>, Vec<&'r Row>)> {
+    let mut series = Vec::new();
+    let mut rows = Vec::new();
+    let mut xs = Vec::new();
+    for (i, m) in methods.iter().enumerate() {
+        let mut pts = Vec::new();
+        for r in done.iter().filter(|r| &r.method == m) {
+            let Some(rl) = &r.roofline else { continue };
+            let before = pts.len();
+            pts.extend(
+                rl.passes
+                    .iter()
+                    .filter(|p| crate::run::is_method_pass(&p.name, m))
+                    .filter_map(|p| Some((p.fragments_per_primitive?, p.fragments_per_s? / 1e9)))
+                    .filter(|p| p.0 > 0.0 && p.1 > 0.0 && p.0.is_finite() && p.1.is_finite()),
+            );
+            if pts.len() > before {
+                rows.push(*r);
+            }
+        }
+        if !pts.is_empty() {
+            xs.extend(pts.iter().map(|p| p.0));
+            series.push(Series::new(
+                m.clone(),
+                PALETTE[i % PALETTE.len()],
+                pts,
+                Style::Points,
+            ));
+        }
+    }
+    let roof = done
+        .iter()
+        .find_map(|r| r.roofline.as_ref()?.fill_roof.clone())?;
+    let lo = xs.iter().copied().fold(f64::INFINITY, f64::min) / 2.0;
+    let hi = xs.iter().copied().fold(0.0, f64::max) * 2.0;
+    if series.is_empty() || !(lo > 0.0 && hi > lo) {
+        return None;
+    }
+    let line: Vec<(f64, f64)> = (0..=48)
+        .map(|k| {
+            let x = lo * (hi / lo).powf(f64::from(k) / 48.0);
+            (x, roof.at(x) / 1e9)
+        })
+        .collect();
+    series.push(Series::new(
+        format!("roof ({})", roof.probe),
+        INK,
+        line,
+        Style::Dashed,
+    ));
+    Some((series, rows))
+}
+
 /// Writes the plots of `s` into `dir`; returns their paths relative to the summary.
 pub fn write_plots(dir: &Path, s: &Summary) -> Result<Vec<String>> {
     let mut written = Vec::new();
@@ -988,6 +1047,24 @@ pub fn write_plots(dir: &Path, s: &Summary) -> Result<Vec<String>> {
             }
         }
     }
+    // The fill roofline: every method render pass at its fragments per primitive and
+    // fragments per second, under the roof of the methods' target (additive RGBA32F).
+    if let Some((series, caption_rows)) = fill_roofline_series(&done, &methods) {
+        let path = need(&mut written, "roofline_fill.png".into())?;
+        scatter(
+            &path,
+            &Plot {
+                title: &format!(
+                    "{}: fill roofline (method render passes against the adapter's fill ceiling)",
+                    s.experiment
+                ),
+                caption: &caption(s, &caption_rows),
+                x: ("fragments per primitive", Scale::Log),
+                y: ("Gfragments/s (fragment-shader invocations)", Scale::Log),
+            },
+            &series,
+        )?;
+    }
     // Fill-rate heatmaps of every run of a scene side by side, on one colour scale.
     if let Some(root) = dir.parent() {
         for scene in &scenes {
@@ -1064,6 +1141,28 @@ pub fn write_plots(dir: &Path, s: &Summary) -> Result<Vec<String>> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_fill_roofline_puts_method_passes_under_the_roof() {
+        let mut beams = crate::summary::test_row("beams");
+        beams.roofline = Some(crate::summary::test_roofline("beams"));
+        let plain = crate::summary::test_row("splatting");
+        let done = [&beams, &plain];
+        let methods = ["beams".to_owned(), "splatting".to_owned()];
+        let (series, rows) = fill_roofline_series(&done, &methods).expect("series");
+        assert_eq!(rows.len(), 1, "only runs with a roofline");
+        assert_eq!(series.len(), 2, "beams' points and the roof");
+        // The base pass is left out: only beams/rasterize, at 100 fragments/primitive.
+        assert_eq!(series[0].points, vec![(100.0, 0.1)]);
+        let roof = &series[1];
+        assert!(roof.name.contains("fill_blend_rgba32f_fullscreen"));
+        let (x0, _) = roof.points[0];
+        let (x1, y1) = *roof.points.last().expect("points");
+        assert!((x0 - 50.0).abs() < 1e-9 && (x1 - 200.0).abs() < 1e-6);
+        // 200 fragments per primitive: 200 / (100 ns + 200 / 2e9 s) = 1e9 per second.
+        assert!((y1 - 1.0).abs() < 1e-9, "{y1}");
+        assert!(fill_roofline_series(&[&plain], &methods[1..]).is_none());
+    }
     use caustics_metrics::inferno;
 
     #[test]

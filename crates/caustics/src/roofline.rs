@@ -16,16 +16,40 @@ use crate::machine::Machine;
 use crate::result::Timing;
 
 /// The passes of one run against the ceilings of its adapter.
-#[derive(Clone, Debug, Serialize, Deserialize, schemars::JsonSchema)]
+#[derive(Clone, Debug, Serialize, Deserialize, schemars::JsonSchema, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct RooflineReport {
     /// The ceilings record read (relative to the checkout when inside it).
     pub ceilings: String,
     /// Commit of the build that measured it, `-dirty` when its tree was.
     pub ceilings_build: String,
+    /// The fill roof of the methods' targets (additive blending into RGBA32F): the
+    /// curve of the roofline plot.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fill_roof: Option<FillRoof>,
     /// Per pass, in recording order (passes without a positive median time are left
     /// out: nothing to read against).
     pub passes: Vec<PassRoofline>,
+}
+
+/// A fill roof: at `s` fragments per primitive a pass can shade at most
+/// `s / (triangle_s + s / fragments_per_s)` fragments per second.
+#[derive(Clone, Debug, Serialize, Deserialize, schemars::JsonSchema, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct FillRoof {
+    /// The full-screen probe it comes from.
+    pub probe: String,
+    /// Full-screen fragments per second.
+    pub fragments_per_s: f64,
+    /// Seconds per triangle beyond its fragments (0 when not measured).
+    pub triangle_s: f64,
+}
+
+impl FillRoof {
+    /// The roof at `fragments_per_primitive`, in fragments per second.
+    pub fn at(&self, fragments_per_primitive: f64) -> f64 {
+        fragments_per_primitive / (self.triangle_s + fragments_per_primitive / self.fragments_per_s)
+    }
 }
 
 /// The roofline model's ceilings from a record.
@@ -58,6 +82,11 @@ pub fn for_run(
     if ceilings.is_empty() {
         return Ok(None);
     }
+    let fill_roof = ceilings.method_target_fill().map(|fill| FillRoof {
+        probe: fill.probe.to_owned(),
+        fragments_per_s: fill.fragments_per_s,
+        triangle_s: ceilings.triangle_s.as_ref().map_or(0.0, |t| t.0),
+    });
     let works = pass_works(timing, count_frame);
     let passes = works
         .iter()
@@ -74,6 +103,7 @@ pub fn for_run(
                 .unwrap_or(&record.build.commit),
             if record.build.dirty { "-dirty" } else { "" }
         ),
+        fill_roof,
         passes,
     }))
 }

@@ -573,7 +573,7 @@ fn reference_noise(reference: &Path) -> Result<Option<f64>> {
     Ok(Some((sum / n).sqrt()))
 }
 
-fn is_method_pass(name: &str, method: &str) -> bool {
+pub(crate) fn is_method_pass(name: &str, method: &str) -> bool {
     name.split('/').next() == Some(method)
 }
 

@@ -152,6 +152,9 @@ pub struct Row {
     /// Fragment-shader invocations of every pass in the count frame.
     #[serde(default)]
     pub pass_fragments: BTreeMap<String, u64>,
+    /// Every pass against the adapter's ceilings (result.json's `roofline`).
+    #[serde(default)]
+    pub roofline: Option<crate::roofline::RooflineReport>,
 }
 
 /// A number from the paper beside a run.
@@ -389,6 +392,7 @@ pub fn build(out: &Path, e: &Experiment, m: &Manifest) -> Result<Summary> {
                         .collect()
                 })
                 .unwrap_or_default(),
+            roofline: result.as_ref().and_then(|r| r.roofline.clone()),
         });
     }
     let distinct = |mut v: Vec<String>| {
@@ -636,6 +640,73 @@ pub fn error_cells(
     ]
 }
 
+/// The method passes of every run against the adapter's ceilings (result.json's
+/// `roofline`), one row per run; nothing when no run has one.
+fn roofline_section(md: &mut String, s: &Summary) {
+    let rows: Vec<(&Row, &crate::roofline::RooflineReport)> = s
+        .runs
+        .iter()
+        .filter(|r| r.status == "done")
+        .filter_map(|r| Some((r, r.roofline.as_ref()?)))
+        .collect();
+    let Some((_, first)) = rows.first() else {
+        return;
+    };
+    let mut records: Vec<String> = rows
+        .iter()
+        .map(|(_, rl)| format!("`{}` (measured by {})", rl.ceilings, rl.ceilings_build))
+        .collect();
+    records.sort();
+    records.dedup();
+    let _ = writeln!(
+        md,
+        "## Roofline\n\nEach method pass against the adapter's own ceilings ({}; `caustics \
+         ceilings` measures them): the pass's counted work at each ceiling, over its median \
+         GPU time. **fill**: its fragments and triangles at the fill rate of its target \
+         (full-screen and small-triangle probes); **bandwidth**: the attachments it clears; \
+         **overhead**: a pass's fixed cost. The bound is the ceiling that explains the \
+         largest share of the time, or **shader** when none explains half of it (the \
+         pass's own instructions, memory accesses and atomics, which pipeline statistics \
+         cannot split); the percentage is that largest share.{}\n",
+        records.join(", "),
+        first.fill_roof.as_ref().map_or(String::new(), |f| format!(
+            " The fill roof of the methods' targets (additive RGBA32F): {:.3} Gfragments/s \
+             full-screen, plus {:.1} ns per triangle.",
+            f.fragments_per_s / 1e9,
+            f.triangle_s * 1e9
+        ))
+    );
+    let _ = writeln!(
+        md,
+        "| scene | method | params | method passes: GPU ms, bound, share of its ceiling |\n|---|---|---|---|"
+    );
+    for (r, rl) in rows {
+        let cells: Vec<String> = rl
+            .passes
+            .iter()
+            .filter(|p| crate::run::is_method_pass(&p.name, &r.method))
+            .map(|p| {
+                format!(
+                    "{} {:.3} ms {} {:.1}%",
+                    p.name.split_once('/').map_or(p.name.as_str(), |n| n.1),
+                    p.gpu_ms,
+                    p.bound.as_str(),
+                    100.0 * p.fraction
+                )
+            })
+            .collect();
+        let _ = writeln!(
+            md,
+            "| {} | {} | {} | {} |",
+            r.scene,
+            r.method,
+            params_cell(&r.params),
+            cells.join("; ")
+        );
+    }
+    let _ = writeln!(md);
+}
+
 /// The markdown summary: one table per group (cost and surface errors), a volume table
 /// beside it when a run of the group has volume errors, skipped and failed runs listed.
 pub fn markdown(s: &Summary, plots: &[String]) -> String {
@@ -787,6 +858,7 @@ pub fn markdown(s: &Summary, plots: &[String]) -> String {
             p.source, p.hardware
         );
     }
+    roofline_section(&mut md, s);
     let others: Vec<&Row> = s.runs.iter().filter(|r| r.status != "done").collect();
     if !others.is_empty() {
         let _ = writeln!(md, "## Not run\n\n| run | status | reason |\n|---|---|---|");
@@ -842,12 +914,75 @@ pub(crate) fn test_row(method: &str) -> Row {
         paper: vec![],
         pass_gpu_ms: Default::default(),
         pass_fragments: Default::default(),
+        roofline: None,
+    }
+}
+
+/// A roofline of one method render pass (`<method>/rasterize`, 100 fragments per
+/// primitive, 5% of its fill ceiling) and one base pass, for tests.
+#[cfg(test)]
+pub(crate) fn test_roofline(method: &str) -> crate::roofline::RooflineReport {
+    use caustics_ceilings::roofline::{Bound, CeilingShare, PassRoofline};
+    let pass = |name: String, bound, fraction| PassRoofline {
+        name,
+        gpu_ms: 10.0,
+        bound,
+        fraction,
+        fill: Some(CeilingShare {
+            ceiling: "fill_blend_rgba32f_fullscreen".into(),
+            work: 1e6,
+            model_ms: 10.0 * fraction,
+            fraction,
+        }),
+        bandwidth: None,
+        overhead: None,
+        fragments_per_s: Some(1e8),
+        fragments_per_primitive: Some(100.0),
+        invocations_per_s: None,
+    };
+    crate::roofline::RooflineReport {
+        ceilings: "results/ceilings/test.json".into(),
+        ceilings_build: "0123456789ab".into(),
+        fill_roof: Some(crate::roofline::FillRoof {
+            probe: "fill_blend_rgba32f_fullscreen".into(),
+            fragments_per_s: 2e9,
+            triangle_s: 1e-7,
+        }),
+        passes: vec![
+            pass("base/direct".into(), Bound::Fill, 0.9),
+            pass(format!("{method}/rasterize"), Bound::Shader, 0.05),
+        ],
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_roofline_section_lists_each_runs_method_passes() {
+        let mut with = test_row("beams");
+        with.roofline = Some(test_roofline("beams"));
+        let without = test_row("splatting");
+        let mut s = summary(vec![with, without]);
+        let md = markdown(&s, &[]);
+        let section = md.split("## Roofline").nth(1).expect("a roofline section");
+        assert!(section.contains("`results/ceilings/test.json` (measured by 0123456789ab)"));
+        assert!(
+            section.contains("| s | beams | defaults | rasterize 10.000 ms shader 5.0% |"),
+            "{section}"
+        );
+        assert!(
+            !section.contains("direct"),
+            "base passes are not the method's: {section}"
+        );
+        assert!(
+            !section.contains("splatting"),
+            "a run without a roofline has no row"
+        );
+        s.runs.iter_mut().for_each(|r| r.roofline = None);
+        assert!(!markdown(&s, &[]).contains("## Roofline"));
+    }
 
     fn errors(rel_mse: f64, hdr_flip: Option<f64>) -> caustics_metrics::Errors {
         caustics_metrics::Errors {

@@ -158,6 +158,12 @@ impl Ceilings {
             .or_else(|| self.fill.first())
     }
 
+    /// The fill ceiling of the methods' caustic targets: additive blending into
+    /// [`caustics_gpu::textures::HDR_FORMAT`] (RGBA32F).
+    pub fn method_target_fill(&self) -> Option<&FillCeiling> {
+        self.fill_for(Some(caustics_gpu::textures::HDR_FORMAT), Some(true))
+    }
+
     /// Whether any ceiling is known at all.
     pub fn is_empty(&self) -> bool {
         self.fill.is_empty() && self.clear_bytes_per_s.is_none() && self.pass_overhead_s.is_none()
