@@ -173,6 +173,15 @@ fn print_summary(dir: &std::path::Path, r: &caustics::result::RunResult) {
     if let Some(s) = &r.timing.method_gpu_ms {
         outln!("  {:<32} {:>9.3} ms", "method total", s.median);
     }
+    if let Some(i) = &r.instrumentation {
+        outln!(
+            "  instrumentation: timed frames {:.3} ms wall against bare frames {:.3} ms: {:+.2}% (count frame {:+.1}%)",
+            i.timed_wall_ms.median,
+            i.bare_wall_ms.median,
+            100.0 * i.overhead,
+            100.0 * i.count_frame_overhead
+        );
+    }
     if let Some(f) = &r.fragments {
         outln!(
             "  fragments: method {} (fill-counted {}, max {}/px)",

@@ -568,6 +568,7 @@ fn run_one(e: &Experiment, spec: &RunSpec, args: &ReproduceArgs, out: &Path) -> 
         // The experiment's budget decides its references (`ensure_references`).
         quick_reference_photons: 0,
         ceilings: args.ceilings.clone(),
+        instrumentation_overhead: false,
     };
     let status = |status: &str, dir: Option<String>, reason: Option<String>| RunStatus {
         index: spec.index,

@@ -64,6 +64,29 @@ pub struct RunResult {
     /// ceilings record of the adapter exists (or in files before it existed).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub roofline: Option<crate::roofline::RooflineReport>,
+    /// What the harness's own measuring costs (`caustics run
+    /// --instrumentation-overhead`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub instrumentation: Option<Instrumentation>,
+}
+
+/// The cost of measuring: CPU wall time per frame (record, submit, wait for the GPU)
+/// of the timed frames (timestamps around every pass) against bare frames (the same
+/// frame with no queries), each bare frame right after a timed one.
+#[derive(Clone, Debug, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct Instrumentation {
+    /// `timed_wall_ms.median / bare_wall_ms.median − 1` (issue 17's goal: ≤ 0.02).
+    pub overhead: f64,
+    /// The count frame (pipeline statistics and fill counting on) against the bare
+    /// median, `count_wall_ms / bare_wall_ms.median − 1`: one frame, so noisier.
+    pub count_frame_overhead: f64,
+    /// Timed frames.
+    pub timed_wall_ms: Summary,
+    /// Bare frames.
+    pub bare_wall_ms: Summary,
+    /// The count frame.
+    pub count_wall_ms: f64,
 }
 
 impl RunResult {

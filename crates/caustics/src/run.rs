@@ -13,8 +13,8 @@ use caustics_metrics::{HdrImage, ToneMap};
 use caustics_scene::Scene;
 
 use crate::result::{
-    ErrorReport, Fragments, FrameCounts, Memory, MethodRun, PassFragments, PassTiming, RunResult,
-    SCHEMA_VERSION, SceneInfo, ScoringInfo, Timing, ToneMapInfo,
+    ErrorReport, Fragments, FrameCounts, Instrumentation, Memory, MethodRun, PassFragments,
+    PassTiming, RunResult, SCHEMA_VERSION, SceneInfo, ScoringInfo, Timing, ToneMapInfo,
 };
 use crate::stats::summarize;
 use crate::{machine, registry};
@@ -85,6 +85,11 @@ pub struct RunOptions {
     /// exists, gives every pass its roofline in result.json.
     #[arg(long, value_name = "DIR", default_value = crate::ceilings_cmd::DEFAULT_ROOT)]
     pub ceilings: PathBuf,
+    /// Also time the frame without instrumentation: after each timed frame, the same
+    /// frame again with no timestamp or statistics queries, and result.json's
+    /// `instrumentation` compares their CPU wall times (record, submit, wait).
+    #[arg(long)]
+    pub instrumentation_overhead: bool,
 }
 
 /// Mean relative standard error per caustic pixel above which `run` says its reference
@@ -216,8 +221,11 @@ pub fn run_scene(o: &RunOptions, scene: Scene) -> Result<RunOutcome> {
     let renderer = Renderer::new(&ctx, gpu_scene, RendererOptions::default())?;
     let mut method = (info.create)(&ctx, &renderer, &parsed)?;
 
-    // Warm-up and timed frames with counting off, then one count frame.
+    // Warm-up and timed frames with counting off, then one count frame. With
+    // --instrumentation-overhead each timed frame is followed by a bare one: the same
+    // frame with no queries at all, so the two alternate and share the machine's state.
     let mut profiler = PassProfiler::new(&ctx, o.warmup + o.frames + 1);
+    let mut bare_profiler = PassProfiler::unmeasured(o.frames);
     for i in 0..o.warmup + o.frames + 1 {
         let mode = if i < o.warmup + o.frames {
             FrameMode::Timed
@@ -227,8 +235,22 @@ pub fn run_scene(o: &RunOptions, scene: Scene) -> Result<RunOutcome> {
         let mut frame = renderer.begin_frame(&mut profiler, mode)?;
         method.record(&mut frame)?;
         frame.submit(&ctx)?;
+        if o.instrumentation_overhead && mode == FrameMode::Timed && i >= o.warmup {
+            // The timed frame's query resolution (its own small submission after the
+            // frame's wall time was taken) finishes first, so neither frame pays for it.
+            ctx.wait_idle()?;
+            let mut frame = renderer.begin_frame(&mut bare_profiler, FrameMode::Timed)?;
+            method.record(&mut frame)?;
+            frame.submit(&ctx)?;
+            ctx.wait_idle()?;
+        }
     }
     let samples = profiler.collect(&ctx)?;
+    let bare_wall_ms: Vec<f64> = bare_profiler
+        .collect(&ctx)?
+        .iter()
+        .map(|f| f.wall_ms)
+        .collect();
     let counters = method.counters(&ctx)?;
     // Methods report buffer overflow as counters named overflow_*; it is never silent.
     for (name, value) in counters
@@ -284,6 +306,7 @@ pub fn run_scene(o: &RunOptions, scene: Scene) -> Result<RunOutcome> {
     let count_frame = samples.last().context("no count frame recorded")?;
     let timing = timing(measured, profiler.has_timestamps(), &o.method);
     let fragments = fragments(count_frame, &fill, &o.method);
+    let instrumentation = instrumentation(measured, count_frame, &bare_wall_ms);
     let run_machine = machine::machine(&ctx.summary);
     let roofline = crate::roofline::for_run(&o.ceilings, &run_machine, &timing, count_frame)?;
 
@@ -407,6 +430,7 @@ pub fn run_scene(o: &RunOptions, scene: Scene) -> Result<RunOutcome> {
         errors,
         errors_1spp,
         roofline,
+        instrumentation,
     };
     let json = serde_json::to_vec_pretty(&result)?;
     caustics_metrics::atomic_write(&dir.join("result.json"), &json)?;
@@ -636,6 +660,25 @@ fn timing(frames: &[caustics_gpu::FrameSample], available: bool, method: &str) -
         frame_wall_ms: summarize(&wall_ms),
         rejected_timestamps: rejected,
     }
+}
+
+/// The timed and count frames' wall times against the bare frames' (none without
+/// `--instrumentation-overhead`).
+fn instrumentation(
+    measured: &[caustics_gpu::FrameSample],
+    count_frame: &caustics_gpu::FrameSample,
+    bare_wall_ms: &[f64],
+) -> Option<Instrumentation> {
+    let bare = summarize(bare_wall_ms)?;
+    let timed: Vec<f64> = measured.iter().map(|f| f.wall_ms).collect();
+    let timed = summarize(&timed)?;
+    Some(Instrumentation {
+        overhead: timed.median / bare.median - 1.0,
+        count_frame_overhead: count_frame.wall_ms / bare.median - 1.0,
+        timed_wall_ms: timed,
+        bare_wall_ms: bare,
+        count_wall_ms: count_frame.wall_ms,
+    })
 }
 
 /// Pipeline statistics per pass of the count frame, and the fill counts.

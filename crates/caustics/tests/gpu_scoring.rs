@@ -166,8 +166,20 @@ fn a_scored_run_keeps_pixel_averaged_and_1spp_errors_side_by_side() {
     let mut o = run_options(&scene, &tmp.path().join("runs"), "wavefront", &[]);
     (o.score_grid, o.exposure, o.references) = (2, None, references);
     (o.warmup, o.frames) = (1, 3);
+    o.instrumentation_overhead = true;
     let (dir, result) = run_dir(&o);
     assert_eq!(result.schema_version, caustics::result::SCHEMA_VERSION);
+    // --instrumentation-overhead: one bare frame after each timed frame, compared by
+    // wall time (no bound on the figure itself: it is a measurement, not a count).
+    let inst = result
+        .instrumentation
+        .as_ref()
+        .expect("instrumentation figures");
+    assert_eq!(inst.bare_wall_ms.samples, 3);
+    assert_eq!(inst.timed_wall_ms.samples, 3);
+    assert!(inst.bare_wall_ms.min > 0.0 && inst.count_wall_ms > 0.0);
+    let expected = inst.timed_wall_ms.median / inst.bare_wall_ms.median - 1.0;
+    assert!((inst.overhead - expected).abs() < 1e-12, "{inst:?}");
     for f in [
         "result.json",
         "surface.exr",

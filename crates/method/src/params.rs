@@ -213,6 +213,22 @@ pub enum Tracer {
 
 crate::param_enum!(Tracer, [Tracer::Impostor, Tracer::Bvh]);
 
+/// How a method's fill-bound pass puts its primitives into its target (issue 17): the
+/// methods that offer the choice declare a `raster` parameter of this type.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Raster {
+    /// The paper's: the hardware rasterizer with additive blending.
+    Hardware,
+    /// A compute pass that adds each covered texel into a fixed-point accumulator with
+    /// integer atomics, then resolves it into the target: the same image on every run,
+    /// and no dependence on the adapter's raster units (on GPUs where few units shade
+    /// pixels and the rest only compute, this is the path that scales).
+    Compute,
+}
+
+crate::param_enum!(Raster, [Raster::Hardware, Raster::Compute]);
+
 /// One parameter as `caustics list` and experiment validation see it.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ParamSpec {

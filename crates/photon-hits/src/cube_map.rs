@@ -60,6 +60,28 @@ impl CausticMap {
         reach: f32,
         config: &PhotonHitConfig,
     ) -> Result<Self, MethodError> {
+        Self::with_atlas_usage(
+            ctx,
+            renderer,
+            method,
+            center,
+            reach,
+            config,
+            wgpu::TextureUsages::empty(),
+        )
+    }
+
+    /// [`CausticMap::new`] with `usage` added to the atlas's (e.g. `STORAGE_BINDING`
+    /// for a compute pass that writes it).
+    pub fn with_atlas_usage(
+        ctx: &GpuContext,
+        renderer: &Renderer,
+        method: &'static str,
+        center: Vec3,
+        reach: f32,
+        config: &PhotonHitConfig,
+        usage: wgpu::TextureUsages,
+    ) -> Result<Self, MethodError> {
         let device = &ctx.device;
         let size = config.cube_size;
         let far = reach * 1.01 + 1e-3;
@@ -94,7 +116,7 @@ impl CausticMap {
                 3 * size,
                 2 * size,
                 1,
-                wgpu::TextureUsages::empty(),
+                usage,
             )?;
             let uniform = uniform_buffer(
                 device,

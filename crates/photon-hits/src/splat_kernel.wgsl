@@ -41,6 +41,12 @@ fn splat_corner(i: u32) -> vec2<f32> {
 
 // Corner `corner` (0..6) of hit `h`'s kernel of side `k` texels on cube face `face`;
 // outside the clip volume where the hit is invalid or lies on another face.
+// The top-left texel (face texels) of the k × k kernel of a hit at `fuv.xy` (face uv).
+fn splat_origin(fuv: vec2<f32>, k: f32) -> vec2<f32> {
+    let s = cm.params.x;
+    return clamp(floor(fuv * s + 0.5 - 0.5 * k), vec2<f32>(0.0), vec2<f32>(s - k));
+}
+
 fn splat_vertex(h: PhotonHit, corner: u32, face: u32, k: f32) -> SplatOut {
     var o: SplatOut;
     o.clip = vec4<f32>(2.0, 2.0, 2.0, 1.0);
@@ -53,7 +59,7 @@ fn splat_vertex(h: PhotonHit, corner: u32, face: u32, k: f32) -> SplatOut {
         return o;
     }
     let s = cm.params.x;
-    let origin = clamp(floor(fuv.xy * s + 0.5 - 0.5 * k), vec2<f32>(0.0), vec2<f32>(s - k));
+    let origin = splat_origin(fuv.xy, k);
     let texel = origin + splat_corner(corner) * k;
     o.flux_face = vec4<f32>(h.flux.rgb / (k * k), f32(face));
     o.normal_distance = vec4<f32>(h.normal.xyz, length(l));
@@ -75,6 +81,32 @@ fn splat_face_direction(face: u32, ab: vec2<f32>) -> vec3<f32> {
     }
 }
 
+// What one kernel texel receives: irradiance (rgb, W/m²) and luminance × distance
+// (alpha) of `flux_share` (W, Φ / k²) at the texel whose centre is `local` (texels from
+// the face's top-left corner) on `face`, for a hit with receiver normal `n` at `offset`
+// from the centre (distance `d_hit`). Shared by the raster splat (`fs_splat`) and the
+// compute splat (splatting's splat_compute.wgsl), so both paths add the same values.
+fn splat_texel(face: u32, local: vec2<f32>, flux_share: vec3<f32>, n: vec3<f32>, d_hit: f32, offset: vec3<f32>) -> vec4<f32> {
+    let s = cm.params.x;
+    let ab = local / s * 2.0 - 1.0;
+    let ab2 = dot(ab, ab);
+    let omega = (4.0 / (s * s)) / pow(1.0 + ab2, 1.5);
+    let dir = splat_face_direction(face, ab) * inverseSqrt(1.0 + ab2);
+    let n_dot_dir = dot(n, dir);
+    var t = d_hit;
+    var cos_theta = abs(dot(n, offset / d_hit));
+    if abs(n_dot_dir) > 1e-4 {
+        let on_plane = dot(n, offset) / n_dot_dir;
+        if on_plane >= 0.5 * d_hit && on_plane <= 2.0 * d_hit {
+            t = on_plane;
+            cos_theta = abs(n_dot_dir);
+        }
+    }
+    // Clamped so a texel seen edge-on from the centre stays finite.
+    let e = flux_share * max(cos_theta, 0.01) / (omega * t * t);
+    return vec4<f32>(e, luminance(e) * t);
+}
+
 @fragment
 fn fs_splat(i: SplatOut) -> @location(0) vec4<f32> {
     let s = cm.params.x;
@@ -82,23 +114,5 @@ fn fs_splat(i: SplatOut) -> @location(0) vec4<f32> {
     // The fragment's texel centre in face coordinates (the face's viewport sits at
     // column face % 3, row face / 3 of the atlas).
     let local = i.clip.xy - vec2<f32>(f32(face % 3u), f32(face / 3u)) * s;
-    let ab = local / s * 2.0 - 1.0;
-    let ab2 = dot(ab, ab);
-    let omega = (4.0 / (s * s)) / pow(1.0 + ab2, 1.5);
-    let dir = splat_face_direction(face, ab) * inverseSqrt(1.0 + ab2);
-    let n = i.normal_distance.xyz;
-    let d_hit = i.normal_distance.w;
-    let n_dot_dir = dot(n, dir);
-    var t = d_hit;
-    var cos_theta = abs(dot(n, i.offset / d_hit));
-    if abs(n_dot_dir) > 1e-4 {
-        let on_plane = dot(n, i.offset) / n_dot_dir;
-        if on_plane >= 0.5 * d_hit && on_plane <= 2.0 * d_hit {
-            t = on_plane;
-            cos_theta = abs(n_dot_dir);
-        }
-    }
-    // Clamped so a texel seen edge-on from the centre stays finite.
-    let e = i.flux_face.rgb * max(cos_theta, 0.01) / (omega * t * t);
-    return vec4<f32>(e, luminance(e) * t);
+    return splat_texel(face, local, i.flux_face.rgb, i.normal_distance.xyz, i.normal_distance.w, i.offset);
 }

@@ -17,6 +17,13 @@
 //! Passes (names `splatting/<pass>`): `light_gbuffer`, `distance_maps`,
 //! `trace_photons`, `splat` (raster, all six faces in one pass), `camera_lookup`.
 //!
+//! `raster=compute` (issue 17) replaces the raster `splat` by a compute pass of the same
+//! name (`splat_compute.wgsl`): one invocation per (hit, kernel row) adds the very
+//! texel values of the raster path (`splat_texel`) into a fixed-point accumulator with
+//! integer atomics, and a second dispatch resolves it into the atlas. The image is the
+//! same on every run (integer sums do not depend on order) and within a stated bound of
+//! the hardware path's (`tests/raster_paths.rs`).
+//!
 //! ```no_run
 //! use caustics_gpu::{AdapterChoice, FrameMode, GpuContext, GpuScene, PassProfiler, Renderer};
 //! use caustics_method::CausticsMethod;
@@ -37,11 +44,11 @@
 //! ```
 
 use bytemuck::{Pod, Zeroable};
-use caustics_gpu::pass::{RasterPass, Shader};
+use caustics_gpu::pass::{ComputePass, RasterPass, Shader};
 use caustics_gpu::textures::additive_hdr_target;
 use caustics_gpu::wgpu::{self, util::DeviceExt};
 use caustics_gpu::{Frame, GpuContext, Renderer};
-use caustics_method::params::closed;
+use caustics_method::params::{Raster, closed};
 use caustics_method::{
     Capabilities, CausticsMethod, CounterDoc, Counters, Method, MethodError, Unsupported,
     method_params,
@@ -50,6 +57,15 @@ use caustics_scene::Scene;
 use photon_hits::{CausticMap, PhotonHitConfig, PhotonHits};
 
 const SPLAT_WGSL: &str = include_str!("splat.wgsl");
+const SPLAT_COMPUTE_WGSL: &str = include_str!("splat_compute.wgsl");
+
+/// Fractional bits of the compute path's fixed-point accumulator (`FRAC_BITS` in
+/// splat_compute.wgsl): each contribution is rounded down to a multiple of 2^-24.
+pub const COMPUTE_FRAC_BITS: u32 = 24;
+
+/// u32 words per atlas texel of the compute path's accumulator: a low and a high word
+/// for each of r, g, b and alpha.
+const ACCUM_WORDS_PER_TEXEL: u64 = 8;
 
 /// Registry name.
 pub const NAME: &str = "splatting";
@@ -63,6 +79,8 @@ method_params! {
         hits: PhotonHitConfig;
         /// splat kernel side in cube-map texels; 0 = chosen from the hit image: 4 x cube_size / resolution (the splatting-kernel experiment's best at every hit resolution)
         kernel_px: u32 = 0 => closed(0.0, 64.0);
+        /// how the kernels reach the cube map: hardware (rasterized quads, additive blending: the paper's) or compute (a compute pass adding each kernel texel into a fixed-point accumulator with integer atomics, then resolved: the same image on every run)
+        raster: Raster = Raster::Hardware;
     }
     check = |p: &SplattingParams| {
         if p.kernel_px > p.hits.cube_size {
@@ -147,13 +165,26 @@ struct SplatUniform {
     _pad: [u32; 3],
 }
 
+/// The splat pass of one (light, generator) pair, on either path.
+enum SplatPass {
+    /// Rasterized quads, additively blended into the atlas.
+    Hardware(RasterPass),
+    /// The compute splat and resolve, and the fixed-point accumulator they share.
+    Compute {
+        pass: ComputePass,
+        _accumulator: wgpu::Buffer,
+        /// The accumulator's hold on the memory ledger, given back with it.
+        _reservation: caustics_gpu::limits::Reservation,
+    },
+}
+
 /// `splatting` bound to one scene.
 pub struct Splatting {
     /// One photon hit image and cube map per (light, caustic generator) pair,
     /// light-major ([`PhotonHits::for_scene`]).
     pairs: Vec<(PhotonHits, CausticMap)>,
     /// The splat pass of each pair (its bind group holds the pair's buffers).
-    splat_passes: Vec<RasterPass>,
+    splat_passes: Vec<SplatPass>,
     kernel_px: u32,
     bytes: u64,
 }
@@ -177,25 +208,102 @@ impl Splatting {
                 }),
                 usage: wgpu::BufferUsages::UNIFORM,
             });
-        let shader = Shader::new(ctx, "splatting splat.wgsl", splat_source())?;
+        let shader = match params.raster {
+            Raster::Hardware => Shader::new(ctx, "splatting splat.wgsl", splat_source())?,
+            Raster::Compute => {
+                Shader::new(ctx, "splatting splat_compute.wgsl", splat_compute_source())?
+            }
+        };
         let mut pairs = Vec::new();
         let mut splat_passes = Vec::new();
         let mut bytes = splat_uniform.size();
         for hits in PhotonHits::for_scene(ctx, renderer, NAME, &params.hits)? {
-            let map = CausticMap::new(ctx, renderer, NAME, hits.center, hits.reach, &params.hits)?;
-            // All six faces in one pass: each hit is drawn once per face, clipped to it.
-            let splat_pass = RasterPass::builder(ctx, "splatting/splat", &shader, "vs_splat")
-                .frame(renderer)
-                .bind(
-                    1,
-                    &[
-                        ("cm", map.uniform()),
-                        ("su", &splat_uniform),
-                        ("hits", &hits.hits),
-                    ],
-                )
-                .fragment("fs_splat", &[Some(additive_hdr_target())])
-                .build()?;
+            let (map, splat_pass) = match params.raster {
+                Raster::Hardware => {
+                    let map = CausticMap::new(
+                        ctx,
+                        renderer,
+                        NAME,
+                        hits.center,
+                        hits.reach,
+                        &params.hits,
+                    )?;
+                    // All six faces in one pass: each hit is drawn once per face,
+                    // clipped to it.
+                    let pass = RasterPass::builder(ctx, "splatting/splat", &shader, "vs_splat")
+                        .frame(renderer)
+                        .bind(
+                            1,
+                            &[
+                                ("cm", map.uniform()),
+                                ("su", &splat_uniform),
+                                ("hits", &hits.hits),
+                            ],
+                        )
+                        .fragment("fs_splat", &[Some(additive_hdr_target())])
+                        .build()?;
+                    (map, SplatPass::Hardware(pass))
+                }
+                Raster::Compute => {
+                    let map = CausticMap::with_atlas_usage(
+                        ctx,
+                        renderer,
+                        NAME,
+                        hits.center,
+                        hits.reach,
+                        &params.hits,
+                        wgpu::TextureUsages::STORAGE_BINDING,
+                    )?;
+                    let size = u64::from(map.size);
+                    let accumulator_bytes = 6 * size * size * ACCUM_WORDS_PER_TEXEL * 4;
+                    let what = format!(
+                        "cube_size: the compute splat's fixed-point accumulator ({} texels x {} bytes)",
+                        6 * size * size,
+                        ACCUM_WORDS_PER_TEXEL * 4
+                    );
+                    let param = |e: caustics_gpu::GpuError| MethodError::Param {
+                        method: NAME,
+                        message: e.to_string(),
+                    };
+                    ctx.limits
+                        .storage(&what, accumulator_bytes, "lower cube_size")
+                        .map_err(param)?;
+                    let reservation = ctx
+                        .memory
+                        .reserve(&what, accumulator_bytes, "lower cube_size")
+                        .map_err(param)?;
+                    // Zero at creation; each resolve zeroes what it read.
+                    let accumulator = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                        label: Some("splatting compute accumulator"),
+                        size: accumulator_bytes,
+                        usage: wgpu::BufferUsages::STORAGE,
+                        mapped_at_creation: false,
+                    });
+                    let pass = ComputePass::builder(ctx, "splatting/splat", &shader)
+                        .frame(renderer)
+                        .bind(
+                            1,
+                            &[
+                                ("cm", map.uniform()),
+                                ("su", &splat_uniform),
+                                ("hits", &hits.hits),
+                                ("accum", &accumulator),
+                                ("atlas_out", &map.atlas.view),
+                            ],
+                        )
+                        .kernels(&["splat", "resolve"])
+                        .build()?;
+                    bytes += accumulator_bytes;
+                    (
+                        map,
+                        SplatPass::Compute {
+                            pass,
+                            _accumulator: accumulator,
+                            _reservation: reservation,
+                        },
+                    )
+                }
+            };
             bytes += hits.bytes() + map.bytes();
             pairs.push((hits, map));
             splat_passes.push(splat_pass);
@@ -231,11 +339,23 @@ impl CausticsMethod for Splatting {
             // depend on the camera; a reused scoring sub-frame only looks them up.
             if !frame.reuses_light_side() {
                 hits.record(frame)?;
-                let target = map.reconstruction_attachment();
-                let mut pass = splat_pass.begin(frame, &target, None)?;
-                for face in 0..6 {
-                    map.set_face(&mut pass, face);
-                    pass.draw(0..6 * hits.texels(), face..face + 1);
+                match splat_pass {
+                    SplatPass::Hardware(raster) => {
+                        let target = map.reconstruction_attachment();
+                        let mut pass = raster.begin(frame, &target, None)?;
+                        for face in 0..6 {
+                            map.set_face(&mut pass, face);
+                            pass.draw(0..6 * hits.texels(), face..face + 1);
+                        }
+                    }
+                    SplatPass::Compute { pass, .. } => {
+                        let rows = u64::from(hits.texels()) * u64::from(self.kernel_px);
+                        let atlas = (3 * map.size, 2 * map.size);
+                        let mut recorder = pass.begin(frame)?;
+                        recorder.dispatch("splat", groups_2d(rows.div_ceil(64)))?;
+                        recorder
+                            .dispatch("resolve", [atlas.0.div_ceil(8), atlas.1.div_ceil(8), 1])?;
+                    }
                 }
             }
             map.record_lookup(frame)?;
@@ -261,6 +381,20 @@ fn splat_source() -> String {
     photon_hits::compose(&format!("{}\n{SPLAT_WGSL}", photon_hits::SPLAT_KERNEL_WGSL))
 }
 
+fn splat_compute_source() -> String {
+    photon_hits::compose(&format!(
+        "{}\n{SPLAT_COMPUTE_WGSL}",
+        photon_hits::SPLAT_KERNEL_WGSL
+    ))
+}
+
+/// Workgroups for `groups` of 64 invocations as (x, y, 1), x at most 32,768; the kernel
+/// reads its linear index as `y · x · 64 + gid.x`.
+fn groups_2d(groups: u64) -> [u32; 3] {
+    let x = groups.clamp(1, 1 << 15);
+    [x as u32, groups.div_ceil(x).max(1) as u32, 1]
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -273,8 +407,26 @@ mod tests {
     }
 
     #[test]
+    fn compute_shader_validates() -> Result<(), String> {
+        shader::validate_wgsl("splat_compute.wgsl", &splat_compute_source())
+    }
+
+    #[test]
     fn splat_uniform_matches_its_wgsl() {
         caustics_gpu::assert_wgsl_layout!(splat_source(), SplatUniform { kernel_px });
+        caustics_gpu::assert_wgsl_layout!(splat_compute_source(), SplatUniform { kernel_px });
+        assert!(
+            SPLAT_COMPUTE_WGSL.contains(&format!("const FRAC_BITS: f32 = {COMPUTE_FRAC_BITS}.0;")),
+            "COMPUTE_FRAC_BITS and the shader's FRAC_BITS agree"
+        );
+    }
+
+    #[test]
+    fn dispatches_cover_every_row() {
+        assert_eq!(groups_2d(0), [1, 1, 1]);
+        assert_eq!(groups_2d(100), [100, 1, 1]);
+        let [x, y, _] = groups_2d(70_000);
+        assert!(u64::from(x) * u64::from(y) >= 70_000 && x <= 1 << 15);
     }
 
     #[test]

@@ -47,6 +47,7 @@ pub(crate) fn run_options(scene: &Path, out: &Path, method: &str, params: &[&str
         references: out.join("no-reference-cache"),
         quick_reference_photons: 0,
         ceilings: out.join("no-ceilings"),
+        instrumentation_overhead: false,
     }
 }
 
