@@ -309,6 +309,12 @@ pub fn run_scene(o: &RunOptions, scene: Scene) -> Result<RunOutcome> {
     let instrumentation = instrumentation(measured, count_frame, &bare_wall_ms);
     let run_machine = machine::machine(&ctx.summary);
     let roofline = crate::roofline::for_run(&o.ceilings, &run_machine, &timing, count_frame)?;
+    if roofline.is_none() && timing.timestamps_available {
+        eprintln!(
+            "note: no ceilings record of this adapter in {}: passes are not read against its ceilings (`caustics ceilings` measures them, in seconds)",
+            o.ceilings.display()
+        );
+    }
 
     let dir = o.out.join(&scene.name).join(&o.method);
     std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
