@@ -391,7 +391,7 @@ impl<'c> FillProbes<'c> {
                 work_unit: "fragments",
                 record: Box::new(move |frame: &mut BareFrame<'_>, layers: u32| {
                     let (pipeline, group) = built.as_ref().map_err(clone_error)?;
-                    let mut pass = color_pass(frame, name, view)?;
+                    let mut pass = color_pass(frame, name, view, wgpu::LoadOp::Load)?;
                     pass.set_pipeline(pipeline);
                     if let Some(group) = group {
                         pass.set_bind_group(0, group, &[]);
@@ -416,7 +416,7 @@ impl<'c> FillProbes<'c> {
             work_unit: "draws",
             record: Box::new(move |frame: &mut BareFrame<'_>, scale: u32| {
                 let (pipeline, _) = empty.as_ref().map_err(clone_error)?;
-                let mut pass = color_pass(frame, "overhead_draw", view)?;
+                let mut pass = color_pass(frame, "overhead_draw", view, wgpu::LoadOp::Load)?;
                 pass.set_pipeline(pipeline);
                 for d in 0..64 * scale {
                     pass.draw(3 * d..3 * d + 3, 0..1);
@@ -436,7 +436,8 @@ impl<'c> FillProbes<'c> {
             work_unit: "bytes",
             record: Box::new(move |frame: &mut BareFrame<'_>, passes: u32| {
                 for _ in 0..passes {
-                    clear_pass(frame, "bandwidth_clear", view)?;
+                    let clear = wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT);
+                    color_pass(frame, "bandwidth_clear", view, clear)?;
                 }
                 Ok(())
             }),
@@ -449,35 +450,6 @@ impl<'c> FillProbes<'c> {
     }
 }
 
-/// A render pass that clears `view` and draws nothing.
-fn clear_pass(
-    frame: &mut BareFrame<'_>,
-    name: &str,
-    view: &wgpu::TextureView,
-) -> Result<(), GpuError> {
-    let attachments = [Some(wgpu::RenderPassColorAttachment {
-        view,
-        depth_slice: None,
-        resolve_target: None,
-        ops: wgpu::Operations {
-            load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-            store: wgpu::StoreOp::Store,
-        },
-    })];
-    frame.render_pass(
-        name,
-        wgpu::RenderPassDescriptor {
-            label: Some(name),
-            color_attachments: &attachments,
-            depth_stencil_attachment: None,
-            timestamp_writes: None,
-            occlusion_query_set: None,
-            multiview_mask: None,
-        },
-    )?;
-    Ok(())
-}
-
 /// A pipeline error is built once and reported by every trial that needs it.
 fn clone_error(e: &GpuError) -> GpuError {
     GpuError::Validation {
@@ -487,20 +459,22 @@ fn clone_error(e: &GpuError) -> GpuError {
     }
 }
 
-/// Opens the fill probes' render pass on `view`. The target keeps what earlier trials
-/// blended (load, not clear), so a trial's time is its draws alone; the layer values
-/// are small enough that thousands of trials stay finite in half floats.
+/// Opens a probe's render pass on `view`. The fill probes load the target, keeping
+/// what earlier trials blended, so a trial's time is its draws alone (the layer values
+/// are small enough that thousands of trials stay finite in half floats); the clear
+/// probe clears it.
 fn color_pass<'f>(
     frame: &'f mut BareFrame<'_>,
     name: &str,
     view: &wgpu::TextureView,
+    load: wgpu::LoadOp<wgpu::Color>,
 ) -> Result<caustics_gpu::ProfiledRenderPass<'f>, GpuError> {
     let attachments = [Some(wgpu::RenderPassColorAttachment {
         view,
         depth_slice: None,
         resolve_target: None,
         ops: wgpu::Operations {
-            load: wgpu::LoadOp::Load,
+            load,
             store: wgpu::StoreOp::Store,
         },
     })];
