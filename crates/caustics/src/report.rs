@@ -213,6 +213,34 @@ fn table(html: &mut String, s: &Summary, rows: &[&Row]) {
     }
 }
 
+/// The method passes of every run against the adapter's ceilings (summary.md's
+/// `## Roofline`); nothing when no run has a roofline.
+fn roofline_table(html: &mut String, s: &Summary) {
+    let Some(table) = crate::summary::roofline_rows(s) else {
+        return;
+    };
+    let _ = writeln!(
+        html,
+        "<h3>Roofline</h3>\n<p class=meta>{}</p>\n<table><tr><th>scene</th><th>method</th><th>params</th><th>method passes: GPU ms, bound, share of its ceiling</th></tr>",
+        esc(&table.caption)
+    );
+    for (r, cells) in &table.rows {
+        let _ = writeln!(
+            html,
+            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
+            esc(&r.scene),
+            esc(&r.method),
+            esc(&params_cell(r)),
+            cells
+                .iter()
+                .map(|c| esc(c))
+                .collect::<Vec<_>>()
+                .join("<br>")
+        );
+    }
+    html.push_str("</table>\n");
+}
+
 fn experiment_section(html: &mut String, dir: &Path, out: &Path, references: &Path) -> Result<()> {
     let s = read_summary(dir)?;
     let id = esc(&s.experiment);
@@ -281,6 +309,7 @@ fn experiment_section(html: &mut String, dir: &Path, out: &Path, references: &Pa
         }
         html.push_str("</table>\n");
     }
+    roofline_table(html, &s);
     // Plots.
     let plots = dir.join("plots");
     if plots.is_dir() {
@@ -787,4 +816,28 @@ pub fn report(args: &ReportArgs) -> Result<PathBuf> {
     let index = out.join("index.html");
     caustics_metrics::atomic_write(&index, html.as_bytes())?;
     Ok(index)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_report_lists_the_roofline_of_runs_that_have_one() {
+        let mut with = crate::summary::test_row("beams");
+        with.roofline = Some(crate::summary::test_roofline("beams"));
+        let mut s = crate::summary::test_summary(vec![with, crate::summary::test_row("splatting")]);
+        let mut html = String::new();
+        roofline_table(&mut html, &s);
+        assert!(html.contains("<h3>Roofline</h3>"), "{html}");
+        assert!(
+            html.contains("<tr><td>s</td><td>beams</td><td>defaults</td><td>rasterize 10.000 ms shader 5.0%</td></tr>"),
+            "{html}"
+        );
+        assert!(!html.contains("splatting"), "{html}");
+        s.runs.iter_mut().for_each(|r| r.roofline = None);
+        let mut none = String::new();
+        roofline_table(&mut none, &s);
+        assert!(none.is_empty());
+    }
 }

@@ -643,58 +643,17 @@ pub fn error_cells(
 /// The method passes of every run against the adapter's ceilings (result.json's
 /// `roofline`), one row per run; nothing when no run has one.
 fn roofline_section(md: &mut String, s: &Summary) {
-    let rows: Vec<(&Row, &crate::roofline::RooflineReport)> = s
-        .runs
-        .iter()
-        .filter(|r| r.status == "done")
-        .filter_map(|r| Some((r, r.roofline.as_ref()?)))
-        .collect();
-    let Some((_, first)) = rows.first() else {
+    let Some(table) = roofline_rows(s) else {
         return;
     };
-    let mut records: Vec<String> = rows
-        .iter()
-        .map(|(_, rl)| format!("`{}` (measured by {})", rl.ceilings, rl.ceilings_build))
-        .collect();
-    records.sort();
-    records.dedup();
     let _ = writeln!(
         md,
-        "## Roofline\n\nEach method pass against the adapter's own ceilings ({}; `caustics \
-         ceilings` measures them): the pass's counted work at each ceiling, over its median \
-         GPU time. **fill**: its fragments and triangles at the fill rate of its target \
-         (full-screen and small-triangle probes); **bandwidth**: the attachments it clears; \
-         **overhead**: a pass's fixed cost. The bound is the ceiling that explains the \
-         largest share of the time, or **shader** when none explains half of it (the \
-         pass's own instructions, memory accesses and atomics, which pipeline statistics \
-         cannot split); the percentage is that largest share.{}\n",
-        records.join(", "),
-        first.fill_roof.as_ref().map_or(String::new(), |f| format!(
-            " The fill roof of the methods' targets (additive RGBA32F): {:.3} Gfragments/s \
-             full-screen, plus {:.1} ns per triangle.",
-            f.fragments_per_s / 1e9,
-            f.triangle_s * 1e9
-        ))
+        "## Roofline\n\n{}\n\n| scene | method | params | method passes: GPU ms, bound, share of its ceiling |\n|---|---|---|---|",
+        table
+            .caption
+            .replace("caustics ceilings", "`caustics ceilings`")
     );
-    let _ = writeln!(
-        md,
-        "| scene | method | params | method passes: GPU ms, bound, share of its ceiling |\n|---|---|---|---|"
-    );
-    for (r, rl) in rows {
-        let cells: Vec<String> = rl
-            .passes
-            .iter()
-            .filter(|p| crate::run::is_method_pass(&p.name, &r.method))
-            .map(|p| {
-                format!(
-                    "{} {:.3} ms {} {:.1}%",
-                    p.name.split_once('/').map_or(p.name.as_str(), |n| n.1),
-                    p.gpu_ms,
-                    p.bound.as_str(),
-                    100.0 * p.fraction
-                )
-            })
-            .collect();
+    for (r, cells) in &table.rows {
         let _ = writeln!(
             md,
             "| {} | {} | {} | {} |",
@@ -705,6 +664,70 @@ fn roofline_section(md: &mut String, s: &Summary) {
         );
     }
     let _ = writeln!(md);
+}
+
+/// The roofline of an experiment's runs, for the summary and the HTML report.
+pub(crate) struct RooflineRows<'s> {
+    /// What the numbers mean, and the ceilings records they were read against.
+    pub(crate) caption: String,
+    /// Each done run with a roofline and its method passes, each as
+    /// `<pass> <ms> ms <bound> <share>%`.
+    pub(crate) rows: Vec<(&'s Row, Vec<String>)>,
+}
+
+/// The runs of `s` that have a roofline; `None` when none has.
+pub(crate) fn roofline_rows(s: &Summary) -> Option<RooflineRows<'_>> {
+    let with: Vec<(&Row, &crate::roofline::RooflineReport)> = s
+        .runs
+        .iter()
+        .filter(|r| r.status == "done")
+        .filter_map(|r| Some((r, r.roofline.as_ref()?)))
+        .collect();
+    let (_, first) = with.first()?;
+    let mut records: Vec<String> = with
+        .iter()
+        .map(|(_, rl)| format!("{} (measured by {})", rl.ceilings, rl.ceilings_build))
+        .collect();
+    records.sort();
+    records.dedup();
+    let caption = format!(
+        "Each method pass against the adapter's own ceilings ({}; caustics ceilings \
+         measures them): the pass's counted work at each ceiling, over its median GPU time. \
+         Fill: its fragments and triangles at the fill rate of its target (full-screen and \
+         small-triangle probes); bandwidth: the attachments it clears; overhead: a pass's \
+         fixed cost. The bound is the ceiling that explains the largest share of the time, \
+         or shader when none explains half of it (the pass's own instructions, memory \
+         accesses and atomics, which pipeline statistics cannot split); the percentage is \
+         that largest share.{}",
+        records.join(", "),
+        first.fill_roof.as_ref().map_or(String::new(), |f| format!(
+            " The fill roof of the methods' targets (additive RGBA32F): {:.3} Gfragments/s \
+             full-screen, plus {:.1} ns per triangle.",
+            f.fragments_per_s / 1e9,
+            f.triangle_s * 1e9
+        ))
+    );
+    let rows = with
+        .into_iter()
+        .map(|(r, rl)| {
+            let cells = rl
+                .passes
+                .iter()
+                .filter(|p| crate::run::is_method_pass(&p.name, &r.method))
+                .map(|p| {
+                    format!(
+                        "{} {:.3} ms {} {:.1}%",
+                        p.name.split_once('/').map_or(p.name.as_str(), |n| n.1),
+                        p.gpu_ms,
+                        p.bound.as_str(),
+                        100.0 * p.fraction
+                    )
+                })
+                .collect();
+            (r, cells)
+        })
+        .collect();
+    Some(RooflineRows { caption, rows })
 }
 
 /// The markdown summary: one table per group (cost and surface errors), a volume table
@@ -918,6 +941,27 @@ pub(crate) fn test_row(method: &str) -> Row {
     }
 }
 
+/// A summary of `runs`, for tests.
+#[cfg(test)]
+pub(crate) fn test_summary(runs: Vec<Row>) -> Summary {
+    Summary {
+        schema_version: 1,
+        experiment: "x".into(),
+        description: String::new(),
+        scale: 1.0,
+        adapters: vec![],
+        commits: vec![],
+        profiles: vec![],
+        paper: None,
+        done: runs.len(),
+        skipped: 0,
+        failed: 0,
+        missing_references: vec![],
+        runs,
+        figures: vec![],
+    }
+}
+
 /// A roofline of one method render pass (`<method>/rasterize`, 100 fragments per
 /// primitive, 5% of its fill ceiling) and one base pass, for tests.
 #[cfg(test)]
@@ -967,7 +1011,8 @@ mod tests {
         let mut s = summary(vec![with, without]);
         let md = markdown(&s, &[]);
         let section = md.split("## Roofline").nth(1).expect("a roofline section");
-        assert!(section.contains("`results/ceilings/test.json` (measured by 0123456789ab)"));
+        assert!(section.contains("results/ceilings/test.json (measured by 0123456789ab)"));
+        assert!(section.contains("`caustics ceilings`"), "{section}");
         assert!(
             section.contains("| s | beams | defaults | rasterize 10.000 ms shader 5.0% |"),
             "{section}"
@@ -1006,22 +1051,7 @@ mod tests {
     }
 
     fn summary(runs: Vec<Row>) -> Summary {
-        Summary {
-            schema_version: 1,
-            experiment: "x".into(),
-            description: String::new(),
-            scale: 1.0,
-            adapters: vec![],
-            commits: vec![],
-            profiles: vec![],
-            paper: None,
-            done: runs.len(),
-            skipped: 0,
-            failed: 0,
-            missing_references: vec![],
-            runs,
-            figures: vec![],
-        }
+        test_summary(runs)
     }
 
     #[test]
