@@ -922,20 +922,8 @@ mod tests {
         )
         .expect("meta");
         let s = Summary {
-            schema_version: 1,
             experiment: "synthetic".into(),
-            description: String::new(),
-            scale: 1.0,
-            adapters: vec![],
-            commits: vec![],
-            profiles: vec![],
-            paper: None,
-            done: rows.len(),
-            skipped: 0,
-            failed: 0,
-            missing_references: vec![],
-            runs: rows,
-            figures: vec![],
+            ..crate::summary::test_summary(rows)
         };
         (e, s)
     }

@@ -1314,22 +1314,7 @@ mod tests {
             )
             .expect("png");
         }
-        let s = Summary {
-            schema_version: 1,
-            experiment: "x".into(),
-            description: String::new(),
-            scale: 1.0,
-            adapters: vec![],
-            commits: vec![],
-            profiles: vec![],
-            paper: None,
-            done: 2,
-            skipped: 0,
-            failed: 0,
-            missing_references: vec![],
-            runs: vec![row("a", "m1", 10), row("b", "m2", 100)],
-            figures: vec![],
-        };
+        let s = crate::summary::test_summary(vec![row("a", "m1", 10), row("b", "m2", 100)]);
         std::fs::create_dir_all(tmp.path().join("plots")).expect("mkdir");
         std::fs::write(tmp.path().join("plots/error_vs_time_old.png"), b"stale").expect("write");
         let written = write_plots(&tmp.path().join("plots"), &s).expect("plots");
