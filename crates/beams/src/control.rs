@@ -120,7 +120,8 @@ pub(crate) const CONTROL: &[Word] = &[
 /// What each counter of both beam methods counts (`static-grid` and `adaptive-beams`
 /// report the same set): the control words read back after the frame (the generate
 /// pass of the last frame, the count frame), then the two that `BeamMethod::counters`
-/// derives. A test checks that every counter they can report is here, and nothing else.
+/// derives and the two of the compute rasterizer (`raster = compute`). A test checks
+/// that every counter they can report is here, and nothing else.
 #[rustfmt::skip]
 pub const COUNTER_DOCS: &[CounterDoc] = &[
     CounterDoc { name: "base_triangles", doc: "triangles of the unrefined projected grid in the light's view, 2 per cell (2 x grid^2); set by the parameters, not counted on the GPU" },
@@ -144,6 +145,8 @@ pub const COUNTER_DOCS: &[CounterDoc] = &[
     CounterDoc { name: "overflow_beams", doc: "beams that found no room in the beam buffer (max_beams) and were not drawn: light missing from the image; 0 in a good run" },
     CounterDoc { name: "overflow_candidates", doc: "children of splits that found no room in the next level's candidate list (max_beams) and were not refined further: light missing from the image; 0 in a good run" },
     CounterDoc { name: "overflow_orphans", doc: "with splat_orphans: orphan records that found no room (as many slots as max_beams) and were not drawn: light missing from the image; 0 in a good run" },
+    CounterDoc { name: "raster_pairs_lit", doc: "with raster = compute: the (beam, pixel) pairs of raster_pairs_shaded that added light (the pixel's ray meets the beam or its visible point lies in it): the fragments of the hardware path that add light" },
+    CounterDoc { name: "raster_pairs_shaded", doc: "with raster = compute: (beam, pixel) pairs the compute rasterizer shaded, every pixel of each beam's hull rectangle (the hardware path shades only the pixels its hull covers, its rasterize fragments)" },
     CounterDoc { name: "splits_camera", doc: "triangles split by the camera criterion: the beam's base spans more than split_camera_px pixels where its central ray passes closest to the eye (0 in static-grid, which never splits; a triangle split for several reasons counts in each splits_*)" },
     CounterDoc { name: "splits_discontinuity", doc: "triangles split by the discontinuity criterion: corners partly missing the generators, on different paths, with normals or depths that differ too much, or an edge midpoint whose light lands off the linear prediction (0 in static-grid)" },
     CounterDoc { name: "splits_deferred", doc: "splits the oracle asked for that the beam budget left undone: the triangle stayed a leaf because splits of higher priority used the budget (0 without beam_budget; counted also in splits_*)" },
@@ -244,13 +247,21 @@ mod tests {
     }
 
     /// Every counter the beam methods can report (every level and family at the
-    /// limits, and the two `BeamMethod::counters` derives) has a doc, and every doc is
+    /// limits, the two `BeamMethod::counters` derives and the compute rasterizer's) has a doc, and every doc is
     /// of a counter they report.
     #[test]
     fn every_counter_is_documented() {
         let c = [0u32; CONTROL_WORDS];
         let mut names: Vec<String> = counters(&c, MAX_LEVELS, MAX_BOUNCES).into_keys().collect();
-        names.extend(["hull_triangles".into(), "base_triangles".into()]);
+        names.extend(
+            [
+                "hull_triangles",
+                "base_triangles",
+                "raster_pairs_shaded",
+                "raster_pairs_lit",
+            ]
+            .map(String::from),
+        );
         if let Err(e) = caustics_method::CounterDoc::check(COUNTER_DOCS, &names) {
             panic!("{e}");
         }

@@ -20,11 +20,11 @@
 @group(1) @binding(12) var<storage, read_write> orphan_slots: array<vec2<u32>>;
 @group(1) @binding(13) var<storage, read_write> orphans: array<Orphan>;
 // Indirect arguments: words 0..3 the dispatch over candidates, 4..7 the hull draw,
-// 8..11 the orphan point draw.
+// 8..11 the orphan point draw, 12..15 the compute rasterizer's dispatch.
 // A group of its own, bound to the real buffer only for the kernels that write it
 // (init_grid, advance, finalize): a buffer cannot be storage and indirect in the same
 // dispatch, so the indirect ones (decide, emit) and scan see a placeholder here.
-@group(2) @binding(0) var<storage, read_write> indirect_args: array<u32, 12>;
+@group(2) @binding(0) var<storage, read_write> indirect_args: array<u32, 16>;
 
 // The words of `control` (C_LEVEL, C_COUNT, ...) are declared once in control.rs,
 // which prepends their constants to this file.
@@ -922,7 +922,8 @@ fn advance() {
 }
 
 // Indirect draws: every beam's hull (8 triangles, 24 vertices per beam) and, with
-// splat_orphans, every orphan corner (3 points per record).
+// splat_orphans, every orphan corner (3 points per record); and the compute
+// rasterizer's dispatch.
 @compute @workgroup_size(1)
 fn finalize() {
     indirect_args[4] = 24u * atomicLoad(&control[C_BEAM_TOTAL]);
@@ -934,4 +935,10 @@ fn finalize() {
     indirect_args[9] = 1u;
     indirect_args[10] = 0u;
     indirect_args[11] = 0u;
+    // raster = compute: one workgroup per beam, in rows of at most 32,768
+    // (rasterize_compute.wgsl reads the beam as y · x + x and skips those past the end).
+    let beams = atomicLoad(&control[C_BEAM_TOTAL]);
+    indirect_args[12] = min(beams, 32768u);
+    indirect_args[13] = (beams + 32767u) / 32768u;
+    indirect_args[14] = 1u;
 }

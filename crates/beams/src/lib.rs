@@ -79,12 +79,21 @@
 //!   beams' prefix sum) and draws them as one-pixel points into the raw surface
 //!   caustic before the filter (`orphans.wgsl`); in a medium their in-scattered light
 //!   stays lost.
+//! - `raster` = compute (issue 17) replaces the hull rasterization by a compute pass of
+//!   the same name (`rasterize_compute.wgsl`): one workgroup per beam shades every
+//!   pixel of its hull's screen rectangle with the fragment shader's own function
+//!   (`beam_shading.wgsl`) and adds the light into a fixed-point accumulator with
+//!   integer atomics, which a full-screen `resolve` pass writes into the raw surface
+//!   caustic and the volume target. The image is the same on every run and within a
+//!   stated bound of the hardware path's (`tests/gpu_beams.rs`); orphan points stay on
+//!   the rasterizer.
 //!
 //! Passes (names `<method>/<pass>`): `light_gbuffer`, `impostors`, `generate` (compute:
 //! `init_grid`, then per level `decide`, `budget` (with a beam budget), `scan`, `emit`,
 //! `advance`, then `finalize`),
-//! `rasterize` (the hulls, one indirect draw), `orphan_points` (with `splat_orphans`,
-//! one indirect draw) and `surface_filter`.
+//! `rasterize` (the hulls, one indirect draw; with `raster` = compute one indirect
+//! dispatch, then `resolve`), `orphan_points` (with `splat_orphans`, one indirect draw)
+//! and `surface_filter`.
 
 pub mod config;
 mod control;
@@ -97,6 +106,7 @@ use caustics_gpu::pass::{ComputePass, RasterPass, Shader};
 use caustics_gpu::textures::{HDR_FORMAT, Target, additive_hdr_target, load_attachment};
 use caustics_gpu::wgpu::{self, util::DeviceExt};
 use caustics_gpu::{Frame, GBuffer, GpuContext, GpuError, LightView, Renderer, shader};
+use caustics_method::params::Raster;
 use caustics_method::{Capabilities, CausticsMethod, Counters, MethodError, Unsupported};
 use caustics_scene::{Scene, Vec3};
 
@@ -109,7 +119,10 @@ use gpu_types::{BEAM_BYTES, BeamUniforms, CANDIDATE_BYTES, FilterUniforms, ORPHA
 const TYPES_WGSL: &str = include_str!("types.wgsl");
 const PATH_WGSL: &str = include_str!("path.wgsl");
 const GENERATE_WGSL: &str = include_str!("generate.wgsl");
+const BEAM_SHADING_WGSL: &str = include_str!("beam_shading.wgsl");
 const RASTERIZE_WGSL: &str = include_str!("rasterize.wgsl");
+const RASTERIZE_COMPUTE_WGSL: &str = include_str!("rasterize_compute.wgsl");
+const RESOLVE_WGSL: &str = include_str!("resolve.wgsl");
 const FILTER_WGSL: &str = include_str!("filter.wgsl");
 const ORPHANS_WGSL: &str = include_str!("orphans.wgsl");
 
@@ -136,7 +149,26 @@ pub fn generate_source() -> String {
 
 /// Hull rasterization with the per-fragment beam intersection.
 pub fn rasterize_source() -> String {
-    shader::compose_method(&format!("{}\n{RASTERIZE_WGSL}", types_wgsl()))
+    shader::compose_method(&format!(
+        "{}\n{BEAM_SHADING_WGSL}\n{RASTERIZE_WGSL}",
+        types_wgsl()
+    ))
+}
+
+/// The compute rasterizer (`raster` = compute): the same per-pixel beam intersection
+/// over each hull's screen rectangle, into the fixed-point accumulator.
+pub fn rasterize_compute_source() -> String {
+    shader::compose_method(&format!(
+        "{}\n{}\n{BEAM_SHADING_WGSL}\n{}\n{RASTERIZE_COMPUTE_WGSL}",
+        types_wgsl(),
+        control::wgsl(),
+        shader::FIXED_POINT_WGSL
+    ))
+}
+
+/// The compute rasterizer's accumulator into the raw surface caustic and the volume.
+pub fn resolve_source() -> String {
+    shader::compose_method(&format!("{}\n{RESOLVE_WGSL}", shader::FIXED_POINT_WGSL))
 }
 
 /// The orphan corners as points (`splat_orphans`).
@@ -208,6 +240,16 @@ pub fn check_scene(scene: &Scene) -> Result<(), Unsupported> {
 const DRAW_ARGS_OFFSET: u64 = 16;
 /// Byte offset of the orphan point draw's arguments there.
 const ORPHAN_DRAW_ARGS_OFFSET: u64 = 32;
+/// Byte offset of the compute rasterizer's dispatch arguments there.
+const RASTER_DISPATCH_ARGS_OFFSET: u64 = 48;
+/// Bytes of the indirect-arguments buffer (`indirect_args` in generate.wgsl).
+const INDIRECT_ARGS_BYTES: u64 = 64;
+/// u32 words per camera pixel of the compute rasterizer's accumulator (`ACCUM_WORDS` in
+/// rasterize_compute.wgsl and resolve.wgsl): surface and volume RGB, a fixed-point
+/// channel each.
+const ACCUM_WORDS_PER_PIXEL: u64 = 6 * shader::FIXED_POINT_WORDS;
+/// Bytes of the compute rasterizer's pair counts (`raster_counts`: two 64-bit counts).
+const RASTER_COUNTS_BYTES: u64 = 16;
 
 /// The beam pipeline bound to one scene.
 pub struct BeamMethod {
@@ -219,12 +261,136 @@ pub struct BeamMethod {
     generate: ComputePass,
     /// Group 2 of `generate`: the indirect arguments, for the kernels that write them.
     args: wgpu::BindGroup,
-    rasterize: RasterPass,
+    rasterize: HullRaster,
     /// With `splat_orphans`: the landed corners of the families leaves drop, as points.
     orphan_points: Option<RasterPass>,
     surface_filter: RasterPass,
     pass_names: PassNames,
     bytes: u64,
+}
+
+/// How the hulls reach the image (`raster`).
+enum HullRaster {
+    /// The paper's: the hulls drawn, their fragments blended.
+    Hardware(RasterPass),
+    /// The compute rasterizer and its resolve, the fixed-point accumulator they share
+    /// and the pair counters.
+    Compute {
+        rasterize: ComputePass,
+        resolve: RasterPass,
+        /// `raster_pairs_shaded`, `raster_pairs_lit` (64-bit): cleared each frame.
+        counts: wgpu::Buffer,
+        _accumulator: wgpu::Buffer,
+        _memory: Reservation,
+    },
+}
+
+impl HullRaster {
+    /// The passes `raster` asks for, and the bytes they hold beyond `b`.
+    fn build(
+        ctx: &GpuContext,
+        renderer: &Renderer,
+        config: &BeamConfig,
+        name: &'static str,
+        b: &Buffers,
+    ) -> Result<(Self, u64), MethodError> {
+        match config.beams.raster {
+            Raster::Hardware => {
+                let shader = Shader::new(ctx, "beams rasterize.wgsl", rasterize_source())?;
+                let pass =
+                    RasterPass::builder(ctx, &format!("{name}/rasterize"), &shader, "vs_beam")
+                        .frame(renderer)
+                        .bind(1, &[("u", &b.uniforms), ("beams", &b.beams)])
+                        .fragment(
+                            "fs_beam",
+                            &[Some(additive_hdr_target()), Some(additive_hdr_target())],
+                        )
+                        // Hull triangles face outwards: drawing back faces only shades
+                        // each covered pixel once per beam, also with the camera inside
+                        // a hull.
+                        .primitive(wgpu::PrimitiveState {
+                            front_face: wgpu::FrontFace::Ccw,
+                            cull_mode: Some(wgpu::Face::Front),
+                            ..Default::default()
+                        })
+                        .counted()
+                        .build()?;
+                Ok((Self::Hardware(pass), 0))
+            }
+            Raster::Compute => {
+                let camera = &renderer.scene().scene.camera;
+                let pixels = u64::from(camera.width) * u64::from(camera.height);
+                let bytes = pixels * ACCUM_WORDS_PER_PIXEL * 4;
+                let what = format!(
+                    "raster=compute: the fixed-point accumulator ({pixels} pixels x {} bytes)",
+                    ACCUM_WORDS_PER_PIXEL * 4
+                );
+                let param = |e: GpuError| MethodError::Param {
+                    method: name,
+                    message: e.to_string(),
+                };
+                let lower = "render fewer pixels or use raster=hardware";
+                ctx.limits.storage(&what, bytes, lower).map_err(param)?;
+                let memory = ctx.memory.reserve(&what, bytes, lower).map_err(param)?;
+                let device = &ctx.device;
+                // Zero at creation; each resolve zeroes what it read.
+                let accumulator = device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("beam compute raster accumulator"),
+                    size: bytes,
+                    usage: wgpu::BufferUsages::STORAGE,
+                    mapped_at_creation: false,
+                });
+                let counts = device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("beam compute raster counts"),
+                    size: RASTER_COUNTS_BYTES,
+                    usage: wgpu::BufferUsages::STORAGE
+                        | wgpu::BufferUsages::COPY_DST
+                        | wgpu::BufferUsages::COPY_SRC,
+                    mapped_at_creation: false,
+                });
+                let shader = Shader::new(
+                    ctx,
+                    "beams rasterize_compute.wgsl",
+                    rasterize_compute_source(),
+                )?;
+                let rasterize = ComputePass::builder(ctx, &format!("{name}/rasterize"), &shader)
+                    .frame(renderer)
+                    .bind(
+                        1,
+                        &[
+                            ("u", &b.uniforms),
+                            ("beams", &b.beams),
+                            ("control", &b.control),
+                            ("accum", &accumulator),
+                            ("raster_counts", &counts),
+                        ],
+                    )
+                    .kernels(&["rasterize"])
+                    .build()?;
+                let shader = Shader::new(ctx, "beams resolve.wgsl", resolve_source())?;
+                let resolve = RasterPass::fullscreen(
+                    ctx,
+                    &format!("{name}/resolve"),
+                    &shader,
+                    "fs_resolve",
+                    &[Some(additive_hdr_target()), Some(additive_hdr_target())],
+                )
+                .frame(renderer)
+                .bind(1, &[("accum", &accumulator)])
+                .build()?;
+                Ok((
+                    Self::Compute {
+                        rasterize,
+                        resolve,
+                        counts,
+                        _accumulator: accumulator,
+                        _memory: memory,
+                    },
+                    bytes + RASTER_COUNTS_BYTES,
+                ))
+            }
+        }
+    }
 }
 
 struct PassNames {
@@ -312,7 +478,11 @@ impl Buffers {
                 bytemuck::cast_slice(&[0u32; CONTROL_WORDS]),
                 wgpu::BufferUsages::COPY_SRC,
             ),
-            indirect_args: storage("beam indirect args", 48, wgpu::BufferUsages::INDIRECT),
+            indirect_args: storage(
+                "beam indirect args",
+                INDIRECT_ARGS_BYTES,
+                wgpu::BufferUsages::INDIRECT,
+            ),
             filter_uniforms: init(
                 "beam filter uniforms",
                 bytemuck::bytes_of(&filter),
@@ -450,23 +620,7 @@ impl BeamMethod {
             .build()?;
         let args = indirect_args_group(device, &generate, &b.indirect_args)?;
 
-        let shader = Shader::new(ctx, "beams rasterize.wgsl", rasterize_source())?;
-        let rasterize = RasterPass::builder(ctx, &format!("{name}/rasterize"), &shader, "vs_beam")
-            .frame(renderer)
-            .bind(1, &[("u", &b.uniforms), ("beams", &b.beams)])
-            .fragment(
-                "fs_beam",
-                &[Some(additive_hdr_target()), Some(additive_hdr_target())],
-            )
-            // Hull triangles face outwards: drawing back faces only shades each
-            // covered pixel once per beam, also with the camera inside a hull.
-            .primitive(wgpu::PrimitiveState {
-                front_face: wgpu::FrontFace::Ccw,
-                cull_mode: Some(wgpu::Face::Front),
-                ..Default::default()
-            })
-            .counted()
-            .build()?;
+        let (rasterize, raster_bytes) = HullRaster::build(ctx, renderer, config, name, &b)?;
 
         let orphan_points = if config.beams.splat_orphans {
             let shader = Shader::new(ctx, "beams orphans.wgsl", orphans_source())?;
@@ -501,7 +655,7 @@ impl BeamMethod {
         )
         .build()?;
 
-        let bytes = light_gbuffer.bytes() + atlas.bytes() + b.bytes();
+        let bytes = light_gbuffer.bytes() + atlas.bytes() + b.bytes() + raster_bytes;
         Ok(Self {
             config: config.clone(),
             light_gbuffer,
@@ -686,22 +840,43 @@ impl CausticsMethod for BeamMethod {
         if !frame.reuses_light_side() {
             self.record_light_side(frame)?;
         }
-        {
-            let targets = renderer.targets();
-            let attachments = [
-                Some(wgpu::RenderPassColorAttachment {
-                    view: &b.raw_surface.view,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                        store: wgpu::StoreOp::Store,
-                    },
-                }),
-                load_attachment(&targets.volume.view),
-            ];
-            let mut pass = self.rasterize.begin(frame, &attachments, None)?;
-            pass.draw_indirect(&b.indirect_args, DRAW_ARGS_OFFSET);
+        // The raw surface caustic is cleared, the volume target added to.
+        let targets = renderer.targets();
+        let attachments = [
+            Some(wgpu::RenderPassColorAttachment {
+                view: &b.raw_surface.view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                    store: wgpu::StoreOp::Store,
+                },
+            }),
+            load_attachment(&targets.volume.view),
+        ];
+        match &self.rasterize {
+            HullRaster::Hardware(rasterize) => {
+                let mut pass = rasterize.begin(frame, &attachments, None)?;
+                pass.draw_indirect(&b.indirect_args, DRAW_ARGS_OFFSET);
+            }
+            HullRaster::Compute {
+                rasterize,
+                resolve,
+                counts,
+                ..
+            } => {
+                frame.encoder.clear_buffer(counts, 0, None);
+                {
+                    let mut pass = rasterize.begin(frame)?;
+                    pass.dispatch_indirect(
+                        "rasterize",
+                        &b.indirect_args,
+                        RASTER_DISPATCH_ARGS_OFFSET,
+                    )?;
+                }
+                let mut pass = resolve.begin(frame, &attachments, None)?;
+                pass.draw_fullscreen();
+            }
         }
         if let Some(orphan_points) = &self.orphan_points {
             // Into the raw surface caustic, before the filter, beside the beams' light.
@@ -733,6 +908,19 @@ impl CausticsMethod for BeamMethod {
         );
         let grid = u64::from(self.config.beams.grid);
         out.insert("base_triangles".into(), 2 * grid * grid);
+        // The compute rasterizer's pairs only where it runs (the hardware path's work
+        // is its rasterize pass's fragments).
+        if let HullRaster::Compute { counts, .. } = &self.rasterize {
+            let w = caustics_gpu::readback::read_buffer_u32(
+                ctx,
+                counts,
+                RASTER_COUNTS_BYTES,
+                "beam raster counts",
+            )?;
+            let count = |i: usize| u64::from(w[i]) | (u64::from(w[i + 1]) << 32);
+            out.insert("raster_pairs_shaded".into(), count(0));
+            out.insert("raster_pairs_lit".into(), count(2));
+        }
         Ok(out)
     }
 
@@ -749,7 +937,27 @@ mod tests {
     fn shaders_validate() -> Result<(), String> {
         shader::validate_wgsl("beams generate.wgsl", &generate_source())?;
         shader::validate_wgsl("beams rasterize.wgsl", &rasterize_source())?;
+        shader::validate_wgsl("beams rasterize_compute.wgsl", &rasterize_compute_source())?;
+        shader::validate_wgsl("beams resolve.wgsl", &resolve_source())?;
         shader::validate_wgsl("beams orphans.wgsl", &orphans_source())?;
         shader::validate_wgsl("beams filter.wgsl", &filter_source())
+    }
+
+    #[test]
+    fn the_compute_rasterizer_agrees_with_its_buffers() {
+        let words = format!("const ACCUM_WORDS: u32 = {ACCUM_WORDS_PER_PIXEL}u;");
+        assert!(RASTERIZE_COMPUTE_WGSL.contains(&words));
+        assert!(RESOLVE_WGSL.contains(&words));
+        assert!(RASTERIZE_COMPUTE_WGSL.contains(&format!(
+            "raster_counts: array<atomic<u32>, {}>;",
+            RASTER_COUNTS_BYTES / 4
+        )));
+        // The dispatch's three words end the indirect-arguments array.
+        assert!(GENERATE_WGSL.contains(&format!(
+            "indirect_args: array<u32, {}>;",
+            INDIRECT_ARGS_BYTES / 4
+        )));
+        assert_eq!(RASTER_DISPATCH_ARGS_OFFSET / 4, 12);
+        assert!(GENERATE_WGSL.contains("indirect_args[12] = min(beams, 32768u);"));
     }
 }

@@ -11,6 +11,14 @@ pub const FRAME_WGSL: &str = include_str!("shaders/frame.wgsl");
 pub const GBUFFER_WGSL: &str = include_str!("shaders/gbuffer.wgsl");
 /// The direct-lighting pass.
 pub const DIRECT_WGSL: &str = include_str!("shaders/direct.wgsl");
+/// 64-bit fixed-point accumulation with integer atomics (`add_fixed`, `take_fixed`) of the
+/// compute-raster paths; the including shader declares `accum: array<atomic<u32>>`.
+pub const FIXED_POINT_WGSL: &str = include_str!("shaders/fixed_point.wgsl");
+/// Fractional bits of [`FIXED_POINT_WGSL`]'s numbers: contributions are rounded to the
+/// nearest multiple of 2^-24.
+pub const FIXED_POINT_FRAC_BITS: u32 = 24;
+/// u32 words per channel of a [`FIXED_POINT_WGSL`] accumulator (low, high).
+pub const FIXED_POINT_WORDS: u64 = 2;
 /// `common.wgsl` followed by `own`, for passes with their own bindings.
 pub fn compose(own: &str) -> String {
     format!("{COMMON_WGSL}\n{own}")
@@ -65,7 +73,24 @@ mod tests {
         validate_wgsl("common.wgsl", COMMON_WGSL)?;
         validate_wgsl("common+frame.wgsl", &compose_method(""))?;
         validate_wgsl("gbuffer.wgsl", &compose(GBUFFER_WGSL))?;
-        validate_wgsl("direct.wgsl", &compose(DIRECT_WGSL))
+        validate_wgsl("direct.wgsl", &compose(DIRECT_WGSL))?;
+        validate_wgsl(
+            "fixed_point.wgsl",
+            &format!(
+                "@group(0) @binding(0) var<storage, read_write> accum: array<atomic<u32>>;\n{FIXED_POINT_WGSL}\n\
+                 @compute @workgroup_size(1) fn k() {{ add_fixed(0u, take_fixed(2u)); }}"
+            ),
+        )
+    }
+
+    #[test]
+    fn the_fixed_point_constants_agree_with_the_shader() {
+        assert!(
+            FIXED_POINT_WGSL.contains(&format!(
+                "const FIXED_FRAC_BITS: f32 = {FIXED_POINT_FRAC_BITS}.0;"
+            )),
+            "FIXED_POINT_FRAC_BITS and the shader's FIXED_FRAC_BITS agree"
+        );
     }
 
     #[test]

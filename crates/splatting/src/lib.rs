@@ -22,7 +22,7 @@
 //! texel values of the raster path (`splat_texel`) into a fixed-point accumulator with
 //! integer atomics, and a second dispatch resolves it into the atlas. The image is the
 //! same on every run (integer sums do not depend on order) and within a stated bound of
-//! the hardware path's (`tests/raster_paths.rs`).
+//! the hardware path's (`tests/accuracy.rs`).
 //!
 //! ```no_run
 //! use caustics_gpu::{AdapterChoice, FrameMode, GpuContext, GpuScene, PassProfiler, Renderer};
@@ -59,13 +59,9 @@ use photon_hits::{CausticMap, PhotonHitConfig, PhotonHits};
 const SPLAT_WGSL: &str = include_str!("splat.wgsl");
 const SPLAT_COMPUTE_WGSL: &str = include_str!("splat_compute.wgsl");
 
-/// Fractional bits of the compute path's fixed-point accumulator (`FRAC_BITS` in
-/// splat_compute.wgsl): each contribution is rounded down to a multiple of 2^-24.
-pub const COMPUTE_FRAC_BITS: u32 = 24;
-
-/// u32 words per atlas texel of the compute path's accumulator: a low and a high word
-/// for each of r, g, b and alpha.
-const ACCUM_WORDS_PER_TEXEL: u64 = 8;
+/// u32 words per atlas texel of the compute path's accumulator (`WORDS` in
+/// splat_compute.wgsl): a fixed-point channel for each of r, g, b and alpha.
+const ACCUM_WORDS_PER_TEXEL: u64 = 4 * caustics_gpu::shader::FIXED_POINT_WORDS;
 
 /// Registry name.
 pub const NAME: &str = "splatting";
@@ -383,8 +379,9 @@ fn splat_source() -> String {
 
 fn splat_compute_source() -> String {
     photon_hits::compose(&format!(
-        "{}\n{SPLAT_COMPUTE_WGSL}",
-        photon_hits::SPLAT_KERNEL_WGSL
+        "{}\n{}\n{SPLAT_COMPUTE_WGSL}",
+        photon_hits::SPLAT_KERNEL_WGSL,
+        caustics_gpu::shader::FIXED_POINT_WGSL
     ))
 }
 
@@ -416,8 +413,8 @@ mod tests {
         caustics_gpu::assert_wgsl_layout!(splat_source(), SplatUniform { kernel_px });
         caustics_gpu::assert_wgsl_layout!(splat_compute_source(), SplatUniform { kernel_px });
         assert!(
-            SPLAT_COMPUTE_WGSL.contains(&format!("const FRAC_BITS: f32 = {COMPUTE_FRAC_BITS}.0;")),
-            "COMPUTE_FRAC_BITS and the shader's FRAC_BITS agree"
+            SPLAT_COMPUTE_WGSL.contains(&format!("const WORDS: u32 = {ACCUM_WORDS_PER_TEXEL}u;")),
+            "ACCUM_WORDS_PER_TEXEL and the shader's WORDS agree"
         );
     }
 

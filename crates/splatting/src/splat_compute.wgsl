@@ -4,14 +4,9 @@
 // integer atomics instead of blended by the rasterizer; `resolve` then writes the
 // accumulator into the caustic cube map's atlas and zeroes it for the next frame.
 //
-// Why fixed point: integer addition is associative, so the sum in every texel, and the
-// image, are the same on every run whatever order the invocations run in, which float
-// atomics or blending do not promise. Each channel is a 64-bit number of 2^-FRAC_BITS
-// units kept in two u32 words (low word added first; a wrap of the low word carries one
-// into the high word, counted exactly once per contribution), so a texel holds sums up
-// to 2^(64 - FRAC_BITS) ≈ 1.1e12 at a resolution of 2^-FRAC_BITS ≈ 6e-8 (W/m², and
-// luminance × m for alpha): each contribution is rounded down to that, on top of its
-// f32 value.
+// Why fixed point, and its range and resolution: caustics-gpu's fixed_point.wgsl
+// (`add_fixed`, `take_fixed`), whose 64-bit channels hold W/m² here, and luminance × m
+// for alpha.
 //
 // No tile binning: one invocation per (hit, kernel row) adds its row's texels straight
 // into the accumulator. Kernels are at most 64 × 64 texels, the small-footprint regime
@@ -26,7 +21,6 @@ struct SplatUniform {
     pad2: u32,
 }
 
-const FRAC_BITS: f32 = 24.0;
 // Words per atlas texel: (low, high) for r, g, b and alpha.
 const WORDS: u32 = 8u;
 
@@ -35,23 +29,6 @@ const WORDS: u32 = 8u;
 @group(1) @binding(2) var<storage, read> hits: array<PhotonHit>;
 @group(1) @binding(3) var<storage, read_write> accum: array<atomic<u32>>;
 @group(1) @binding(4) var atlas_out: texture_storage_2d<rgba32float, write>;
-
-// Adds `v` (≥ 0) in fixed point to the 64-bit number at words `w`, `w + 1`.
-fn add_fixed(w: u32, v: f32) {
-    let q = max(v, 0.0) * exp2(FRAC_BITS);
-    let high = min(floor(q * exp2(-32.0)), 4294967295.0);
-    let low = u32(min(q - high * 4294967296.0, 4294967295.0));
-    if low != 0u {
-        let before = atomicAdd(&accum[w], low);
-        // The low word wrapped: carry one into the high word.
-        if before > 0xffffffffu - low {
-            atomicAdd(&accum[w + 1u], 1u);
-        }
-    }
-    if high >= 1.0 {
-        atomicAdd(&accum[w + 1u], u32(high));
-    }
-}
 
 // One invocation per (hit, kernel row): the row's k texels of the hit's kernel on the
 // face its direction falls in, as the raster path's quad covers them.
@@ -92,12 +69,6 @@ fn splat(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
     }
 }
 
-fn fixed_value(w: u32) -> f32 {
-    let low = atomicExchange(&accum[w], 0u);
-    let high = atomicExchange(&accum[w + 1u], 0u);
-    return (f32(high) * 4294967296.0 + f32(low)) * exp2(-FRAC_BITS);
-}
-
 // One invocation per atlas texel: the accumulated sums into the atlas (every texel
 // written, so no clear is needed), and the accumulator zeroed for the next frame.
 @compute @workgroup_size(8, 8)
@@ -107,6 +78,6 @@ fn resolve(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let w = (gid.y * size.x + gid.x) * WORDS;
-    let value = vec4<f32>(fixed_value(w), fixed_value(w + 2u), fixed_value(w + 4u), fixed_value(w + 6u));
+    let value = vec4<f32>(take_fixed(w), take_fixed(w + 2u), take_fixed(w + 4u), take_fixed(w + 6u));
     textureStore(atlas_out, vec2<i32>(gid.xy), value);
 }

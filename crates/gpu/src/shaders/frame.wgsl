@@ -39,6 +39,24 @@ fn count_fragment(frag_coord: vec4<f32>) {
     }
 }
 
+// Unit direction of the camera ray through `pixel_center` (pixels, y down, centres at
+// +0.5), for passes that shade pixels without a rasterized primitive (compute-raster
+// paths). The eye projects to x = y = w = 0, so a direction d is on the ray exactly when
+// (row0 − x·row3)·d = 0 and (row1 − y·row3)·d = 0 (rows of view_proj, xyz parts): d is
+// their cross product, on the side in front of the eye (row3·d > 0).
+fn camera_ray(pixel_center: vec2<f32>) -> vec3<f32> {
+    let ndc = vec2<f32>(
+        pixel_center.x * frame.resolution.z * 2.0 - 1.0,
+        1.0 - pixel_center.y * frame.resolution.w * 2.0,
+    );
+    let m = frame.view_proj;
+    let row0 = vec3<f32>(m[0].x, m[1].x, m[2].x);
+    let row1 = vec3<f32>(m[0].y, m[1].y, m[2].y);
+    let row3 = vec3<f32>(m[0].w, m[1].w, m[2].w);
+    let d = normalize(cross(row0 - ndc.x * row3, row1 - ndc.y * row3));
+    return select(-d, d, dot(row3, d) > 0.0);
+}
+
 // Camera G-buffer at a pixel.
 struct GSample {
     hit: bool,
