@@ -330,6 +330,16 @@ impl HullRaster {
                     message: e.to_string(),
                 };
                 let lower = "render fewer pixels or use raster=hardware";
+                // rasterize_compute.wgsl finds a pixel's row with an f32 quotient, exact
+                // below 2^24.
+                if pixels > 1 << 24 {
+                    return Err(MethodError::Param {
+                        method: name,
+                        message: format!(
+                            "raster=compute: {pixels} camera pixels, more than the compute rasterizer's 2^24; {lower}"
+                        ),
+                    });
+                }
                 ctx.limits.storage(&what, bytes, lower).map_err(param)?;
                 let memory = ctx.memory.reserve(&what, bytes, lower).map_err(param)?;
                 let device = &ctx.device;

@@ -54,7 +54,8 @@ var<workgroup> edges: array<vec3<f32>, 132>;
 var<workgroup> edge_count: atomic<u32>;
 // The rectangle of pixels the footprint can hold, (x0, y0, x1, y1) inclusive.
 var<workgroup> rect: vec4<i32>;
-// Pixels of a batch inside the footprint, as indices into the rectangle.
+// Pixels of a batch inside the footprint, packed as y << 16 | x (images are at most
+// 65,535 pixels wide, wgpu's texture limit well below that).
 const BATCH: u32 = 256u;
 var<workgroup> queue: array<u32, BATCH>;
 var<workgroup> queue_len: atomic<u32>;
@@ -149,6 +150,7 @@ fn rasterize(
     }
     let r = workgroupUniformLoad(&rect);
     let width = u32(max(r.z - r.x + 1, 0));
+    let inv_width = 1.0 / f32(max(width, 1u));
     let pixels = width * u32(max(r.w - r.y + 1, 0));
     let n_edges = atomicLoad(&edge_count);
     let image_width = u32(size.x);
@@ -160,20 +162,21 @@ fn rasterize(
     for (var start = 0u; start < pixels; start += BATCH) {
         for (var k = lane; k < BATCH; k += 64u) {
             let i = start + k;
-            let center = vec2<f32>(f32(u32(r.x) + i % width), f32(u32(r.y) + i / width)) + 0.5;
+            let pixel = vec2<u32>(r.xy) + rect_offset(i, width, inv_width);
+            let center = vec2<f32>(pixel) + 0.5;
             var inside = i < pixels;
             for (var e = 0u; e < n_edges; e++) {
                 inside = inside && dot(edges[e].xy, center) + edges[e].z >= 0.0;
             }
             if inside {
-                queue[atomicAdd(&queue_len, 1u)] = i;
+                queue[atomicAdd(&queue_len, 1u)] = (pixel.y << 16u) | pixel.x;
             }
         }
         workgroupBarrier();
         let queued = atomicLoad(&queue_len);
         for (var q = lane; q < queued; q += 64u) {
-            let i = queue[q];
-            let pixel = vec2<u32>(u32(r.x) + i % width, u32(r.y) + i / width);
+            let packed = queue[q];
+            let pixel = vec2<u32>(packed & 0xffffu, packed >> 16u);
             let o = shade_beam(b, pixel, camera_ray(vec2<f32>(pixel) + 0.5));
             shaded += 1u;
             if any(o.surface.xyz > vec3<f32>(0.0)) || any(o.volume.xyz > vec3<f32>(0.0)) {
@@ -200,6 +203,19 @@ fn rasterize(
         add_count(0u, atomicLoad(&pairs_shaded));
         add_count(2u, atomicLoad(&pairs_lit));
     }
+}
+
+// The (column, row) of index `i` in a rectangle `width` pixels wide, without an integer
+// division (slow where SIMD lanes divide one at a time, as on CPU adapters): the f32
+// quotient (exact operands below 2^24) is off by at most one, then corrected.
+fn rect_offset(i: u32, width: u32, inv_width: f32) -> vec2<u32> {
+    var row = u32(f32(i) * inv_width);
+    if row * width > i {
+        row -= 1u;
+    } else if (row + 1u) * width <= i {
+        row += 1u;
+    }
+    return vec2<u32>(i - row * width, row);
 }
 
 // Adds `n` to the 64-bit count at words `w`, `w + 1`.
