@@ -935,10 +935,12 @@ fn finalize() {
     indirect_args[9] = 1u;
     indirect_args[10] = 0u;
     indirect_args[11] = 0u;
-    // raster = compute: one workgroup per beam, in rows of at most 32,768
+    // raster = compute: workgroups per beam along z, beams in rows of at most 32,768
     // (rasterize_compute.wgsl reads the beam as y · x + x and skips those past the end).
     let beams = atomicLoad(&control[C_BEAM_TOTAL]);
     indirect_args[12] = min(beams, 32768u);
     indirect_args[13] = (beams + 32767u) / 32768u;
-    indirect_args[14] = 1u;
+    // Workgroups per beam: at most 2,048 loop iterations of 64 pixels each over a
+    // rectangle as large as the image (rasterize_compute.wgsl, llvmpipe's loop limit).
+    indirect_args[14] = (u32(frame.resolution.x) * u32(frame.resolution.y) + 131071u) / 131072u;
 }

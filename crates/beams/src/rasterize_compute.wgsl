@@ -1,29 +1,30 @@
-// Beam rasterization on the compute path (`raster=compute`, issue 17): one workgroup
-// per beam shades every pixel of the rectangle its hull projects to with the same
-// function as the hardware path's fragments (`shade_beam`, beam_shading.wgsl), and adds
+// Beam rasterization on the compute path (`raster=compute`, issue 17): workgroups of a
+// beam clip its hull at the camera plane, find the convex polygon it projects to, and
+// shade the pixels of the polygon's rectangle that lie inside it with the same
+// function as the hardware path's fragments (`shade_beam`, beam_shading.wgsl), adding
 // what it gives into a fixed-point accumulator with integer atomics (fixed_point.wgsl),
 // which `resolve.wgsl` then writes into the raw surface caustic and the volume target.
 //
 // Same pixels lit: a pixel gets light from a beam only where its camera ray meets the
 // beam (volume) or its G-buffer point lies in it (surface), and the hull (the convex
 // hull of the base and top triangles, or the bounding prism, Sect. 4.3) contains the
-// beam, so both such pixels are inside the hull's projection: the convex polygon of its
-// six projected points, loosened by half a pixel, which the workgroup tests each pixel
-// of the polygon's rectangle against before shading it. The compute path thus shades
-// a few more pixels than the rasterizer in vain (counted, `raster_pairs_*`), none
-// fewer. Same values: each pixel's ray comes from its centre (`camera_ray`) where
-// the fragment interpolates the hull point on the same ray, so the two differ by f32
-// rounding and the fixed point's 2^-24.
+// beam, so both such pixels are inside the hull's projection, the polygon, each edge
+// moved out past every point and by a hundredth of a pixel for rounding. The compute
+// path thus shades as many pixels as the rasterizer covers, or a few more, in vain
+// (counted, `raster_pairs_*`), none fewer. Same values: each pixel's ray comes from
+// its centre (`camera_ray`) where the fragment interpolates the hull point on the same
+// ray, so the two differ by f32 rounding and the fixed point's 2^-24.
 //
-// Beam-binned, not tile-binned: a beam's rectangle is walked by its own workgroup, 64
-// pixels at a time, so no binning pass or per-tile list is needed and a beam's record
-// is read once per workgroup; the cost is an edge test for each of the rectangle's
-// pixels outside the polygon.
+// Beam-binned, not tile-binned: a beam's rectangle is walked by its own workgroups
+// (as many as the image needs to keep each invocation under llvmpipe's loop limit, see
+// below), 64 pixels at a time, so no binning pass or per-tile list is needed; the cost
+// is an edge test for each of the rectangle's pixels outside the polygon and the
+// polygon found once per workgroup.
 
 @group(1) @binding(2) var<storage, read> control: array<u32>;
 @group(1) @binding(3) var<storage, read_write> accum: array<atomic<u32>>;
-// 64-bit counts as (low, high) words: [0, 1] (beam, pixel) pairs shaded (inside the polygon), [2, 3] those
-// that added light.
+// 64-bit counts as (low, high) words: [0, 1] (beam, pixel) pairs shaded (inside the
+// polygon), [2, 3] those that added light.
 @group(1) @binding(4) var<storage, read_write> raster_counts: array<atomic<u32>, 4>;
 
 // u32 words per pixel of the accumulator: surface r, g, b, then volume r, g, b, each a
@@ -54,12 +55,6 @@ var<workgroup> edges: array<vec3<f32>, 132>;
 var<workgroup> edge_count: atomic<u32>;
 // The rectangle of pixels the footprint can hold, (x0, y0, x1, y1) inclusive.
 var<workgroup> rect: vec4<i32>;
-// Pixels of a batch inside the footprint, packed as y << 16 | x (images are at most
-// 65,535 pixels wide, wgpu's texture limit well below that).
-const BATCH: u32 = 256u;
-var<workgroup> queue: array<u32, BATCH>;
-var<workgroup> queue_len: atomic<u32>;
-
 @compute @workgroup_size(64)
 fn rasterize(
     @builtin(workgroup_id) wid: vec3<u32>,
@@ -67,6 +62,12 @@ fn rasterize(
     @builtin(local_invocation_index) lane: u32,
 ) {
     let beam = wid.y * groups.x + wid.x;
+    // Workgroup z of groups.z shades every groups.z-th run of 64 pixels of the beam's
+    // rectangle: lavapipe (llvmpipe) ends a shader invocation's loops after 65,535
+    // iterations in all, which one workgroup walking a whole 1024x768 rectangle
+    // exceeds (its pixels past that were silently skipped).
+    let chunk = wid.z;
+    let chunks = groups.z;
     // Uniform across the workgroup (a read-only load at the workgroup's index), so the
     // barriers below are reached by every invocation or by none.
     if beam >= control[C_BEAM_TOTAL] {
@@ -79,7 +80,6 @@ fn rasterize(
         atomicStore(&pairs_lit, 0u);
         atomicStore(&projected_count, 0u);
         atomicStore(&edge_count, 0u);
-        atomicStore(&queue_len, 0u);
     }
     if lane < 6u {
         clip[lane] = frame.view_proj * vec4<f32>(b.hull[lane].xyz, 1.0);
@@ -156,45 +156,33 @@ fn rasterize(
     let image_width = u32(size.x);
     var shaded = 0u;
     var lit = 0u;
-    // Batches of BATCH pixels of the rectangle: every invocation tests BATCH / 64 of
-    // them against the footprint and queues those inside, then the queue is shaded 64
-    // at a time, so no SIMD lane idles beside a neighbour that shades.
-    for (var start = 0u; start < pixels; start += BATCH) {
-        for (var k = lane; k < BATCH; k += 64u) {
-            let i = start + k;
-            let pixel = vec2<u32>(r.xy) + rect_offset(i, width, inv_width);
-            let center = vec2<f32>(pixel) + 0.5;
-            var inside = i < pixels;
-            for (var e = 0u; e < n_edges; e++) {
-                inside = inside && dot(edges[e].xy, center) + edges[e].z >= 0.0;
-            }
-            if inside {
-                queue[atomicAdd(&queue_len, 1u)] = (pixel.y << 16u) | pixel.x;
+    // This workgroup's pixels of the rectangle, 64 at a time: tested against the
+    // polygon, shaded if inside.
+    for (var i = lane + 64u * chunk; i < pixels; i += 64u * chunks) {
+        let pixel = vec2<u32>(r.xy) + rect_offset(i, width, inv_width);
+        let center = vec2<f32>(pixel) + 0.5;
+        var inside = true;
+        for (var e = 0u; e < n_edges; e++) {
+            let edge = edges[e];
+            if dot(edge.xy, center) + edge.z < 0.0 {
+                inside = false;
             }
         }
-        workgroupBarrier();
-        let queued = atomicLoad(&queue_len);
-        for (var q = lane; q < queued; q += 64u) {
-            let packed = queue[q];
-            let pixel = vec2<u32>(packed & 0xffffu, packed >> 16u);
-            let o = shade_beam(b, pixel, camera_ray(vec2<f32>(pixel) + 0.5));
-            shaded += 1u;
-            if any(o.surface.xyz > vec3<f32>(0.0)) || any(o.volume.xyz > vec3<f32>(0.0)) {
-                lit += 1u;
-                let w = (pixel.y * image_width + pixel.x) * ACCUM_WORDS;
-                add_fixed(w, o.surface.x);
-                add_fixed(w + 2u, o.surface.y);
-                add_fixed(w + 4u, o.surface.z);
-                add_fixed(w + 6u, o.volume.x);
-                add_fixed(w + 8u, o.volume.y);
-                add_fixed(w + 10u, o.volume.z);
-            }
+        if !inside {
+            continue;
         }
-        workgroupBarrier();
-        if lane == 0u {
-            atomicStore(&queue_len, 0u);
+        let o = shade_beam(b, pixel, camera_ray(center));
+        shaded += 1u;
+        if any(o.surface.xyz > vec3<f32>(0.0)) || any(o.volume.xyz > vec3<f32>(0.0)) {
+            lit += 1u;
+            let w = (pixel.y * image_width + pixel.x) * ACCUM_WORDS;
+            add_fixed(w, o.surface.x);
+            add_fixed(w + 2u, o.surface.y);
+            add_fixed(w + 4u, o.surface.z);
+            add_fixed(w + 6u, o.volume.x);
+            add_fixed(w + 8u, o.volume.y);
+            add_fixed(w + 10u, o.volume.z);
         }
-        workgroupBarrier();
     }
     atomicAdd(&pairs_shaded, shaded);
     atomicAdd(&pairs_lit, lit);
