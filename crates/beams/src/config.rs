@@ -54,7 +54,7 @@ method_params! {
         tracer: Tracer = Tracer::Impostor;
         /// also splat the light of the families a leaf drops (its corners part ways: a silhouette, different paths or receivers): each landed corner as a one-pixel point of a third of the triangle's flux, on the surface caustic (paper: false, that light is lost; bound: max_beams point records)
         splat_orphans: bool = false;
-        /// how the hulls reach the image: hardware (rasterized, additively blended: the paper's) or compute (one workgroup per beam shades the pixels of its hull's screen rectangle with the same per-pixel function and adds the light into a fixed-point accumulator with integer atomics, then a full-screen pass resolves it: the same image on every run; bound: 48 bytes of accumulator per camera pixel)
+        /// how the hulls reach the image: hardware (rasterized, additively blended: the paper's) or compute (the workgroups of a beam shade the pixels of its clipped hull's projected polygon with the same per-pixel function and add the light into a fixed-point accumulator with integer atomics, then a full-screen pass resolves it: the same image on every run; bound: 48 bytes of accumulator per camera pixel)
         raster: Raster = Raster::Hardware;
         /// sigma (px) of the low-pass filter on the surface caustic (Sect. 7), 0 = off (bound: a (4 sigma + 1)^2 gather per pixel)
         surface_filter_px: f64 = 1.0 => closed(0.0, 16.0);

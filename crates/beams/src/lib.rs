@@ -80,13 +80,13 @@
 //!   caustic before the filter (`orphans.wgsl`); in a medium their in-scattered light
 //!   stays lost.
 //! - `raster` = compute (issue 17) replaces the hull rasterization by a compute pass of
-//!   the same name (`rasterize_compute.wgsl`): one workgroup per beam shades every
-//!   pixel of its hull's screen rectangle with the fragment shader's own function
-//!   (`beam_shading.wgsl`) and adds the light into a fixed-point accumulator with
-//!   integer atomics, which a full-screen `resolve` pass writes into the raw surface
-//!   caustic and the volume target. The image is the same on every run and within a
-//!   stated bound of the hardware path's (`tests/gpu_beams.rs`); orphan points stay on
-//!   the rasterizer.
+//!   the same name (`rasterize_compute.wgsl`): the workgroups of a beam clip its hull at
+//!   the camera plane, find the convex polygon it projects to and shade the pixels
+//!   inside it with the fragment shader's own function (`beam_shading.wgsl`), adding
+//!   the light into a fixed-point accumulator with integer atomics, which a full-screen
+//!   `resolve` pass writes into the raw surface caustic and the volume target. The image
+//!   is the same on every run and within a stated bound of the hardware path's
+//!   (`tests/gpu_beams.rs`); orphan points stay on the rasterizer.
 //!
 //! Passes (names `<method>/<pass>`): `light_gbuffer`, `impostors`, `generate` (compute:
 //! `init_grid`, then per level `decide`, `budget` (with a beam budget), `scan`, `emit`,
