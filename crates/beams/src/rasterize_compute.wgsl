@@ -63,9 +63,9 @@ fn rasterize(
 ) {
     let beam = wid.y * groups.x + wid.x;
     // Workgroup z of groups.z shades every groups.z-th run of 64 pixels of the beam's
-    // rectangle: lavapipe (llvmpipe) ends a shader invocation's loops after 65,535
-    // iterations in all, which one workgroup walking a whole 1024x768 rectangle
-    // exceeds (its pixels past that were silently skipped).
+    // rectangle: on lavapipe one workgroup walking a whole 1024x768 rectangle stopped
+    // after about 65,535 loop iterations per invocation in all (llvmpipe's loop limit,
+    // as the counts fit), silently skipping the rest of its pixels.
     let chunk = wid.z;
     let chunks = groups.z;
     // Uniform across the workgroup (a read-only load at the workgroup's index), so the
