@@ -46,6 +46,9 @@ pub enum Command {
     /// memory bandwidth, storage atomics, pass and draw overhead) through the harness's
     /// pass profiler and keep them as the adapter's record under results/ceilings/.
     Ceilings(CeilingsArgs),
+    /// List the adapters wgpu finds, the one `run` would pick, and each one's features
+    /// and limits.
+    Adapters(crate::adapters_cmd::AdaptersArgs),
     /// Write a static HTML report (index.html + images) of reproduced experiments.
     Report(ReportArgs),
     /// Print the JSON Schema of a scene, experiment or result file (committed under

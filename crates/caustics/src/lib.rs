@@ -49,6 +49,7 @@ pub fn error_text(e: &anyhow::Error) -> String {
     text
 }
 
+pub mod adapters_cmd;
 pub mod ceilings_cmd;
 pub mod cli;
 pub mod compare;

@@ -26,7 +26,9 @@ pub struct Machine {
 /// The source the binary was built from.
 #[derive(Clone, Debug, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct Build {
-    /// `git rev-parse HEAD` of the working tree, or "unknown".
+    /// `git rev-parse HEAD` of the working tree; where the tree is no git checkout (a
+    /// copy sent to another machine), the commit [`SOURCE_COMMIT_ENV`] declares; else
+    /// "unknown".
     pub commit: String,
     /// Whether the tree had uncommitted changes (outside `results/`).
     pub dirty: bool,
@@ -126,11 +128,25 @@ fn git(args: &[&str]) -> Option<String> {
 /// The pathspec of the source: the whole checkout but `results/`.
 const SOURCE_PATHSPEC: [&str; 3] = ["--", ":(top)", ":(top,exclude)results"];
 
+/// Names the commit of a source tree that is no git checkout (a clean commit's files
+/// copied to a machine with a GPU): read only where git cannot read the tree, and
+/// taken only as 40 hex digits.
+pub const SOURCE_COMMIT_ENV: &str = "CAUSTICS_SOURCE_COMMIT";
+
+fn declared_commit() -> Option<String> {
+    std::env::var(SOURCE_COMMIT_ENV)
+        .ok()
+        .map(|c| c.trim().to_ascii_lowercase())
+        .filter(|c| c.len() == 40 && c.bytes().all(|b| b.is_ascii_hexdigit()))
+}
+
 /// The commit and dirtiness of the source tree, read at run time. Changes under
 /// `results/` do not make a build dirty: they are what runs write, not what they run
 /// (a reproduction committed beside others would otherwise call itself dirty).
 pub fn build() -> Build {
-    let commit = git(&["rev-parse", "HEAD"]).unwrap_or_else(|| "unknown".into());
+    let commit = git(&["rev-parse", "HEAD"])
+        .or_else(declared_commit)
+        .unwrap_or_else(|| "unknown".into());
     let status = [
         &["status", "--porcelain", "--untracked-files=no"][..],
         &SOURCE_PATHSPEC,

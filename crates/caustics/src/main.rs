@@ -110,6 +110,10 @@ fn main() -> ExitCode {
             outln!("written to {}", path.display());
             ExitCode::SUCCESS
         }),
+        Command::Adapters(args) => caustics::adapters_cmd::adapters(&args).map(|text| {
+            out!("{text}");
+            ExitCode::SUCCESS
+        }),
         Command::Schema { kind } => {
             out!("{}", caustics::schemas::schema_text(kind));
             Ok(ExitCode::SUCCESS)

@@ -32,6 +32,17 @@ fn committed_experiments_load() {
         let e = Experiment::load(&f, 1.0).unwrap_or_else(|e| panic!("{e}"));
         assert!(!e.runs.is_empty(), "{}", f.display());
     }
+    // The real-GPU experiments (bench/gpu_check.sh) sit one folder down, outside `all`.
+    let gpu = caustics::experiment::names_in(&dir.join("gpu"));
+    assert!(gpu.contains(&"paper-scenes".to_owned()), "{gpu:?}");
+    assert!(
+        !names.contains(&"paper-scenes".to_owned()),
+        "paper-scenes must stay out of `reproduce all`"
+    );
+    for f in resolve("all", &dir.join("gpu")).expect("gpu experiments") {
+        let e = Experiment::load(&f, 1.0).unwrap_or_else(|e| panic!("{e}"));
+        assert!(!e.runs.is_empty(), "{}", f.display());
+    }
 }
 
 #[test]

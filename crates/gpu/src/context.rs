@@ -106,6 +106,67 @@ fn is_hardware(t: wgpu::DeviceType) -> bool {
     )
 }
 
+/// Backends the harness opens (where the platform has them).
+const BACKENDS: wgpu::Backends = wgpu::Backends::VULKAN
+    .union(wgpu::Backends::METAL)
+    .union(wgpu::Backends::DX12);
+
+/// Every adapter the instance finds, in the instance's order: what `caustics adapters`
+/// lists and what [`choose_adapter`] picks from. Errors when there is none.
+pub fn enumerate_adapters() -> Result<Vec<wgpu::Adapter>, GpuError> {
+    let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
+    desc.backends = BACKENDS;
+    let instance = wgpu::Instance::new(desc);
+    let adapters = pollster::block_on(instance.enumerate_adapters(BACKENDS));
+    if adapters.is_empty() {
+        return Err(GpuError::NoAdapter {
+            backends: format!("{BACKENDS:?}"),
+        });
+    }
+    Ok(adapters)
+}
+
+/// Index into `adapters` of the one `choice` picks: by default the first hardware
+/// adapter, else the first (lavapipe on a machine without a GPU); with a filter, the
+/// first whose name contains it (case-insensitive), else an error listing them all.
+pub fn choose_adapter(
+    adapters: &[wgpu::Adapter],
+    choice: &AdapterChoice,
+) -> Result<usize, GpuError> {
+    match choice {
+        AdapterChoice::Default => Ok(adapters
+            .iter()
+            .position(|a| is_hardware(a.get_info().device_type))
+            .unwrap_or(0)),
+        AdapterChoice::Flag(s) | AdapterChoice::Env(s) => {
+            let wanted = s.to_lowercase();
+            adapters
+                .iter()
+                .position(|a| a.get_info().name.to_lowercase().contains(&wanted))
+                .ok_or_else(|| GpuError::AdapterNotFound {
+                    wanted: s.clone(),
+                    source_of_filter: match choice {
+                        AdapterChoice::Flag(_) => "--adapter".into(),
+                        _ => ADAPTER_ENV.into(),
+                    },
+                    available: adapters
+                        .iter()
+                        .map(|a| {
+                            let i = a.get_info();
+                            format!("{} ({:?}, {:?})", i.name, i.backend, i.device_type)
+                        })
+                        .collect::<Vec<_>>()
+                        .join("; "),
+                })
+        }
+    }
+}
+
+/// The adapter's facts as the result files record them.
+pub fn adapter_summary(adapter: &wgpu::Adapter) -> AdapterSummary {
+    summary(&adapter.get_info())
+}
+
 impl GpuContext {
     /// Opens a device on the adapter picked by `choice`.
     pub fn new(choice: &AdapterChoice) -> Result<Self, GpuError> {
@@ -113,52 +174,9 @@ impl GpuContext {
     }
 
     async fn new_async(choice: &AdapterChoice) -> Result<Self, GpuError> {
-        let backends = wgpu::Backends::VULKAN | wgpu::Backends::METAL | wgpu::Backends::DX12;
-        let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
-        desc.backends = backends;
-        let instance = wgpu::Instance::new(desc);
-        let adapters = instance.enumerate_adapters(backends).await;
-        if adapters.is_empty() {
-            return Err(GpuError::NoAdapter {
-                backends: format!("{backends:?}"),
-            });
-        }
-        let names: Vec<String> = adapters
-            .iter()
-            .map(|a| {
-                let i = a.get_info();
-                format!("{} ({:?}, {:?})", i.name, i.backend, i.device_type)
-            })
-            .collect();
-        let adapter = match choice {
-            AdapterChoice::Default => {
-                let hw = adapters
-                    .iter()
-                    .position(|a| is_hardware(a.get_info().device_type));
-                let idx = hw.unwrap_or(0);
-                adapters.into_iter().nth(idx)
-            }
-            AdapterChoice::Flag(s) | AdapterChoice::Env(s) => {
-                let wanted = s.to_lowercase();
-                let found = adapters
-                    .into_iter()
-                    .find(|a| a.get_info().name.to_lowercase().contains(&wanted));
-                if found.is_none() {
-                    return Err(GpuError::AdapterNotFound {
-                        wanted: s.clone(),
-                        source_of_filter: match choice {
-                            AdapterChoice::Flag(_) => "--adapter".into(),
-                            _ => ADAPTER_ENV.into(),
-                        },
-                        available: names.join("; "),
-                    });
-                }
-                found
-            }
-        }
-        .ok_or_else(|| GpuError::NoAdapter {
-            backends: format!("{backends:?}"),
-        })?;
+        let mut adapters = enumerate_adapters()?;
+        let index = choose_adapter(&adapters, choice)?;
+        let adapter = adapters.swap_remove(index);
 
         let info = adapter.get_info();
         let available = adapter.features();

@@ -42,6 +42,7 @@ pub mod triangle_bvh;
 
 pub use context::{
     ADAPTER_ENV, AdapterChoice, AdapterSummary, GpuContext, OPTIONAL_FEATURES, REQUIRED_FEATURES,
+    adapter_summary, choose_adapter, enumerate_adapters,
 };
 pub use error::GpuError;
 pub use frame::{BareFrame, Frame, ProfiledComputePass, ProfiledRenderPass};
