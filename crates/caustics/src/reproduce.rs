@@ -84,7 +84,24 @@ pub struct ReproduceArgs {
     /// hash).
     #[arg(long)]
     pub allow_dirty: bool,
+    /// Start no run after this many seconds (references included): the runs left are
+    /// listed as `not_run` and the summary is written from the rest; the same command
+    /// again keeps the complete runs and does the others. For a leased GPU or a CI job
+    /// with a deadline, where a killed reproduction would leave no summary.
+    #[arg(long, value_name = "SECONDS", value_parser = parse_budget_s, conflicts_with = "summary_only")]
+    pub time_budget_s: Option<f64>,
 }
+
+fn parse_budget_s(s: &str) -> std::result::Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
+        _ => Err(format!("expected a number of seconds >= 0, got {s:?}")),
+    }
+}
+
+/// Status of a run the time budget left out (`--time-budget-s`) or an interrupted
+/// reproduction never completed (`--summary-only` of a folder without a manifest).
+pub const NOT_RUN: &str = "not_run";
 
 /// Bumped when a field of the manifest or summary changes meaning.
 pub const MANIFEST_VERSION: u32 = 1;
@@ -126,12 +143,12 @@ pub struct RunStatus {
     pub index: usize,
     /// `<scene>/<method>/<params>`.
     pub key: String,
-    /// "done", "skipped" or "failed".
+    /// "done", "skipped", "failed" or [`NOT_RUN`].
     pub status: String,
     /// Folder of `result.json`, relative to the experiment folder (done runs).
     #[serde(default)]
     pub dir: Option<String>,
-    /// Why it was skipped or failed.
+    /// Why it was skipped, failed or not run.
     #[serde(default)]
     pub reason: Option<String>,
 }
@@ -176,6 +193,22 @@ pub fn reproduce(args: &ReproduceArgs) -> Result<Outcome> {
         let out = args.out.join(&e.def.name);
         if args.summary_only {
             let _lock = DirLock::take(&out)?;
+            if !out.join("manifest.json").exists() && out.join("runs").is_dir() {
+                // Killed before its manifest (a lease or deadline ran out): summarize the
+                // runs that completed, list the others as not run.
+                let manifest = interrupted_manifest(e, &out, args.scale);
+                let n_done = manifest.runs.iter().filter(|r| r.status == "done").count();
+                eprintln!(
+                    "{}: no manifest.json (an interrupted reproduction): summarizing its {n_done} complete runs of {}, the others listed as not run",
+                    out.display(),
+                    manifest.runs.len()
+                );
+                let s = crate::summary::write_all(&out, e, &manifest, &args.references)?;
+                write_manifest(&out, &manifest)?;
+                outcome.failed += s.failed;
+                outcome.dirs.push(out);
+                continue;
+            }
             let manifest = read_manifest(&out)?;
             let same_file = manifest.experiment_hash == e.hash;
             // A file changed only in its description, paper or figures makes the same runs.
@@ -279,6 +312,7 @@ fn reproduce_one(
     progress.enable_steady_tick(std::time::Duration::from_millis(500));
     let mut statuses = Vec::new();
     let mut kept = 0;
+    let mut not_run = 0;
     for spec in &runs {
         progress.set_message(spec.key());
         let rel = run_rel(spec);
@@ -308,6 +342,23 @@ fn reproduce_one(
                     status: "done".into(),
                     dir: Some(rel.display().to_string()),
                     reason: None,
+                }
+            }
+            _ if args
+                .time_budget_s
+                .is_some_and(|b| start.elapsed().as_secs_f64() >= b) =>
+            {
+                // Left as it is: a stale folder is only replaced by the run that redoes it.
+                not_run += 1;
+                RunStatus {
+                    index: spec.index,
+                    key: spec.key(),
+                    status: NOT_RUN.into(),
+                    dir: None,
+                    reason: Some(format!(
+                        "the time budget (--time-budget-s {}) was spent before it started; the same command again does it",
+                        args.time_budget_s.unwrap_or_default()
+                    )),
                 }
             }
             c => {
@@ -344,6 +395,12 @@ fn reproduce_one(
     if kept > 0 {
         eprintln!(
             "{}: kept {kept} complete runs of an earlier reproduction (--fresh redoes them)",
+            e.def.name
+        );
+    }
+    if not_run > 0 {
+        eprintln!(
+            "{}: time budget spent: {not_run} runs not started (the same command again does them)",
             e.def.name
         );
     }
@@ -418,9 +475,9 @@ fn check_manifest(m: &Manifest) -> std::result::Result<(), String> {
         ));
     }
     for (i, r) in m.runs.iter().enumerate() {
-        if !["done", "skipped", "failed"].contains(&r.status.as_str()) {
+        if !["done", "skipped", "failed", NOT_RUN].contains(&r.status.as_str()) {
             return Err(format!(
-                "runs[{i}].status: expected \"done\", \"skipped\" or \"failed\", got {:?}",
+                "runs[{i}].status: expected \"done\", \"skipped\", \"failed\" or \"{NOT_RUN}\", got {:?}",
                 r.status
             ));
         }
@@ -542,6 +599,42 @@ fn ensure_references(
 }
 
 /// `runs/<params>/<scene>/<method>`: the run folder, relative to the experiment folder.
+/// The manifest of a reproduction killed before it wrote one: a run whose folder holds
+/// its `result.json` (written last of a run's files) is done, every other is not run.
+/// The experiment is taken as the one the folder was made from; its runs' own
+/// `result.json` name their scene, method and parameters.
+fn interrupted_manifest(e: &Experiment, out: &Path, scale: f64) -> Manifest {
+    let runs = e
+        .runs
+        .iter()
+        .map(|spec| {
+            let rel = run_rel(spec);
+            let complete = out.join(&rel).join("result.json").is_file();
+            RunStatus {
+                index: spec.index,
+                key: spec.key(),
+                status: if complete { "done" } else { NOT_RUN }.into(),
+                dir: complete.then(|| rel.display().to_string()),
+                reason: (!complete).then(|| {
+                    "the reproduction was interrupted before this run completed".to_owned()
+                }),
+            }
+        })
+        .collect();
+    Manifest {
+        schema_version: MANIFEST_VERSION,
+        experiment: e.def.name.clone(),
+        experiment_hash: e.hash.clone(),
+        runs_hash: Some(e.runs_hash.clone()),
+        scale,
+        shard: [1, 1],
+        merged_from: Vec::new(),
+        runs,
+        missing_references: Vec::new(),
+        rendered_references: Vec::new(),
+    }
+}
+
 fn run_rel(spec: &RunSpec) -> PathBuf {
     Path::new("runs")
         .join(&spec.slug)

@@ -40,6 +40,9 @@ pub struct Summary {
     pub skipped: usize,
     /// Runs failed.
     pub failed: usize,
+    /// Runs not started (the time budget ran out, or the reproduction was interrupted).
+    #[serde(default)]
+    pub not_run: usize,
     /// References that were missing: those runs have no errors.
     pub missing_references: Vec<String>,
     /// One row per run, in experiment order.
@@ -101,7 +104,7 @@ pub struct Row {
     pub width: u32,
     /// Image size.
     pub height: u32,
-    /// "done", "skipped", "failed".
+    /// "done", "skipped", "failed" or "not_run".
     pub status: String,
     /// Why skipped or failed.
     pub reason: Option<String>,
@@ -416,6 +419,7 @@ pub fn build(out: &Path, e: &Experiment, m: &Manifest) -> Result<Summary> {
         done: count("done"),
         skipped: count("skipped"),
         failed: count("failed"),
+        not_run: count(crate::reproduce::NOT_RUN),
         missing_references: m.missing_references.clone(),
         runs: rows,
         figures: Vec::new(),
@@ -740,14 +744,19 @@ pub fn markdown(s: &Summary, plots: &[String]) -> String {
     }
     let _ = writeln!(
         md,
-        "Adapter: {}. Commit: {}. Build: {}. Scale {}. {} runs done, {} skipped, {} failed.\n",
+        "Adapter: {}. Commit: {}. Build: {}. Scale {}. {} runs done, {} skipped, {} failed{}.\n",
         s.adapters.join("; "),
         s.commits.join(", "),
         s.profiles.join(", "),
         s.scale,
         s.done,
         s.skipped,
-        s.failed
+        s.failed,
+        if s.not_run > 0 {
+            format!(", {} not run (listed under Not run)", s.not_run)
+        } else {
+            String::new()
+        }
     );
     let _ = writeln!(
         md,
@@ -956,6 +965,7 @@ pub(crate) fn test_summary(runs: Vec<Row>) -> Summary {
         done: runs.len(),
         skipped: 0,
         failed: 0,
+        not_run: 0,
         missing_references: vec![],
         runs,
         figures: vec![],
