@@ -390,6 +390,7 @@ fn mutated_experiment_result_manifest_and_summary_files_never_panic_and_name_the
         summary_only: false,
         fresh: false,
         allow_dirty: false,
+        time_budget_s: None,
     })
     .expect("seed reproduction");
     assert_eq!(out.failed, 0);

@@ -50,6 +50,7 @@ fn args(tmp: &Path, exp: &Path, out: &str, shard: Option<&str>) -> ReproduceArgs
         summary_only: false,
         fresh: false,
         allow_dirty: false,
+        time_budget_s: None,
     }
 }
 
@@ -175,6 +176,74 @@ fn reproduce_then_shards_merged_equal_the_unsharded_run() {
         std::fs::read(dir.join("summary.json")).expect("summary")
     );
     assert!(dir.join("summary.md").is_file());
+
+    // A time budget: the runs complete from before are kept, no other starts once it is
+    // spent (`not_run`, with a summary), and the same command again does only those.
+    let copy = |name: &str| {
+        let to = t.join(name);
+        std::fs::create_dir_all(&to).expect("mkdir");
+        let ok = Command::new("cp")
+            .args([
+                "-a",
+                dir.to_str().expect("utf8"),
+                to.to_str().expect("utf8"),
+            ])
+            .status()
+            .expect("cp");
+        assert!(ok.success());
+        to.join("tiny")
+    };
+    let budget_dir = copy("budget");
+    let ring50_rel = ring50.dir.as_deref().expect("dir");
+    std::fs::remove_dir_all(budget_dir.join(ring50_rel)).expect("rm run");
+    let o = reproduce(&ReproduceArgs {
+        time_budget_s: Some(0.0),
+        ..args(t, &exp, "budget", None)
+    })
+    .expect("budgeted reproduce");
+    assert_eq!(o.failed, 0);
+    let b = read_summary(&budget_dir).expect("summary");
+    // The skipped run has no folder either: it waits too.
+    assert_eq!((b.done, b.skipped, b.not_run), (6, 0, 2), "{:?}", b.runs);
+    assert!(!budget_dir.join(ring50_rel).exists(), "a run started");
+    let m = read_manifest(&budget_dir).expect("manifest");
+    let waiting = m
+        .runs
+        .iter()
+        .find(|r| r.key == ring50.key)
+        .expect("ring50 in the manifest");
+    assert_eq!(waiting.status, caustics::reproduce::NOT_RUN);
+    assert!(
+        waiting
+            .reason
+            .as_deref()
+            .is_some_and(|r| r.contains("--time-budget-s 0")),
+        "{waiting:?}"
+    );
+    let md = std::fs::read_to_string(budget_dir.join("summary.md")).expect("md");
+    assert!(md.contains("2 not run (listed under Not run)"), "{md}");
+    reproduce(&args(t, &exp, "budget", None)).expect("resumed");
+    assert_eq!(deterministic(&dir), deterministic(&budget_dir));
+
+    // A reproduction killed before its manifest: --summary-only summarizes the runs
+    // whose result.json exists and lists the others as not run.
+    let killed_dir = copy("killed");
+    std::fs::remove_file(killed_dir.join("manifest.json")).expect("rm manifest");
+    std::fs::remove_file(killed_dir.join("summary.json")).expect("rm summary");
+    std::fs::remove_file(killed_dir.join(ring50_rel).join("result.json")).expect("rm result");
+    reproduce(&ReproduceArgs {
+        summary_only: true,
+        ..args(t, &exp, "killed", None)
+    })
+    .expect("summary of an interrupted reproduction");
+    let k = read_summary(&killed_dir).expect("summary");
+    assert_eq!((k.done, k.failed, k.not_run), (6, 0, 2), "{:?}", k.runs);
+    let m = read_manifest(&killed_dir).expect("manifest written");
+    assert!(
+        m.runs
+            .iter()
+            .any(|r| r.key == ring50.key && r.status == caustics::reproduce::NOT_RUN)
+    );
 
     // The HTML report: self-contained (every image it shows lies beside it).
     let index = caustics::report::report(&caustics::report::ReportArgs {
