@@ -27,7 +27,7 @@ pub struct Machine {
 #[derive(Clone, Debug, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct Build {
     /// `git rev-parse HEAD` of the working tree; where the tree is no git checkout (a
-    /// copy sent to another machine), the commit [`SOURCE_COMMIT_ENV`] declares; else
+    /// copy sent to another machine), the commit `CAUSTICS_SOURCE_COMMIT` declares; else
     /// "unknown".
     pub commit: String,
     /// Whether the tree had uncommitted changes (outside `results/`).
