@@ -2,7 +2,7 @@
 # Issue 17's check on a real GPU, in one go: the adapters wgpu finds with the chosen
 # one's features and limits (`caustics adapters`), that adapter's measured ceilings
 # (`caustics ceilings`), every method at 1024x768 on its paper's scene with both raster
-# paths (`caustics reproduce bench/experiments/gpu/paper-scenes.json`: not part of `reproduce all`, a pinhole run at this size did not finish in 10 minutes on lavapipe; references rendered on the CPU first), and
+# paths (`caustics reproduce bench/experiments/gpu/paper-scenes.json`: not part of `reproduce all`, one pinhole run at 128x96 took 8 min 17 s on lavapipe, this is 64x the pixels; references rendered on the CPU first), and
 # the instrumentation overhead (bench/instrumentation_overhead.sh).
 #
 # Usage: bench/gpu_check.sh OUT_DIR [EXPERIMENT_SECONDS]
