@@ -385,10 +385,12 @@ pub fn run_scene(o: &RunOptions, scene: Scene) -> Result<RunOutcome> {
             if let Some(v) = r.volume.as_ref().filter(|_| info.capabilities.volume) {
                 write_error_maps(&dir, &volume, v, "volume_error", &mut images)?;
             }
-            (
-                Some(score(&surface, &volume)?),
-                Some(score(&surface_1spp, &volume_1spp)?),
-            )
+            // The two scorings are independent (each mostly single-threaded FLIP).
+            let (pixel_averaged, one_spp) = rayon::join(
+                || score(&surface, &volume),
+                || score(&surface_1spp, &volume_1spp),
+            );
+            (Some(pixel_averaged?), Some(one_spp?))
         }
         None => {
             eprintln!(

@@ -34,15 +34,48 @@ fn committed_experiments_load() {
     }
     // The real-GPU experiments (bench/gpu_check.sh) sit one folder down, outside `all`.
     let gpu = caustics::experiment::names_in(&dir.join("gpu"));
-    assert!(gpu.contains(&"paper-scenes".to_owned()), "{gpu:?}");
-    assert!(
-        !names.contains(&"paper-scenes".to_owned()),
-        "paper-scenes must stay out of `reproduce all`"
-    );
+    for n in ["paper-scenes", "paper-scenes-adaptive-beams"] {
+        assert!(gpu.contains(&n.to_owned()), "{n} missing from {gpu:?}");
+        assert!(
+            !names.contains(&n.to_owned()),
+            "{n} must stay out of `reproduce all`"
+        );
+    }
+    let runs_of = |name: &str| {
+        let e = Experiment::load(&dir.join("gpu").join(format!("{name}.json")), 1.0)
+            .unwrap_or_else(|e| panic!("{e}"));
+        let mut runs: Vec<String> = e
+            .runs
+            .iter()
+            .map(|r| {
+                format!(
+                    "{} {}x{} {}/{}",
+                    r.key(),
+                    r.scene.camera.width,
+                    r.scene.camera.height,
+                    r.frames,
+                    r.warmup
+                )
+            })
+            .collect();
+        runs.sort();
+        (e, runs)
+    };
     for f in resolve("all", &dir.join("gpu")).expect("gpu experiments") {
         let e = Experiment::load(&f, 1.0).unwrap_or_else(|e| panic!("{e}"));
         assert!(!e.runs.is_empty(), "{}", f.display());
     }
+    // The adaptive-beams file is paper-scenes' adaptive-beams runs, no more, no fewer, at
+    // the same resolution, frames and reference: its results stand in for those runs.
+    let (all, all_runs) = runs_of("paper-scenes");
+    let (adaptive, adaptive_runs) = runs_of("paper-scenes-adaptive-beams");
+    let expected: Vec<String> = all_runs
+        .into_iter()
+        .filter(|r| r.contains("/adaptive-beams/"))
+        .collect();
+    assert_eq!(adaptive_runs, expected);
+    assert_eq!(adaptive_runs.len(), 8);
+    assert_eq!(adaptive.def.reference, all.def.reference);
 }
 
 #[test]

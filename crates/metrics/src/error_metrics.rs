@@ -220,29 +220,57 @@ pub fn all_errors(
         Some(t) => Some(rel_mse(t, reference, REL_MSE_EPS)?),
         None => None,
     };
-    let (mut hdr, mut hdr_after, mut start, mut stop) = (None, None, None, None);
-    if reference.pixels.iter().any(|&p| crate::luminance(p) > 0.0) {
-        let (first, last) = crate::hdr_flip_exposures_over(reference, &region)?;
-        let h = crate::hdr_flip_with_exposures(test, reference, first, last)?;
-        if let Some(t) = &flux_normalized {
-            let after =
-                crate::hdr_flip_with_exposures(t, reference, h.start_exposure, h.stop_exposure)?;
-            hdr_after = Some(after.mean);
+    // HDR-FLIP (twice), LDR-FLIP (twice) and SSIM are most of a run's CPU time at
+    // 1024x768 (NVIDIA's FLIP runs on one thread): they are independent, so they run in
+    // parallel; each is computed exactly as alone.
+    let hdr_flips = || -> Result<_, MetricsError> {
+        if !reference.pixels.iter().any(|&p| crate::luminance(p) > 0.0) {
+            return Ok(None);
         }
-        hdr = Some(h.mean);
-        start = Some(f64::from(h.start_exposure));
-        stop = Some(f64::from(h.stop_exposure));
-    }
+        let (first, last) = crate::hdr_flip_exposures_over(reference, &region)?;
+        let (h, after) = rayon::join(
+            || crate::hdr_flip_with_exposures(test, reference, first, last),
+            || {
+                flux_normalized
+                    .as_ref()
+                    .map(|t| crate::hdr_flip_with_exposures(t, reference, first, last))
+                    .transpose()
+            },
+        );
+        Ok(Some((h?, after?.map(|a| a.mean))))
+    };
+    let ((flip, flip_after_best_scale), (hdr_flips, ssim)) = rayon::join(
+        || {
+            rayon::join(
+                || crate::flip(test, reference, tone),
+                || crate::flip(&rescaled, reference, tone),
+            )
+        },
+        || {
+            rayon::join(hdr_flips, || {
+                crate::ssim_with_range(&display_test, &display_reference, Some(1.0))
+            })
+        },
+    );
+    let (hdr, hdr_after, start, stop) = match hdr_flips? {
+        Some((h, after)) => (
+            Some(h.mean),
+            after,
+            Some(f64::from(h.start_exposure)),
+            Some(f64::from(h.stop_exposure)),
+        ),
+        None => (None, None, None, None),
+    };
     Ok(Errors {
         rmse: rmse(test, reference)?,
         rel_mse: rel_mse(test, reference, REL_MSE_EPS)?,
         psnr_db: psnr(&display_test, &display_reference, Some(1.0))?,
-        ssim: crate::ssim_with_range(&display_test, &display_reference, Some(1.0))?,
-        flip: crate::flip(test, reference, tone)?,
+        ssim: ssim?,
+        flip: flip?,
         best_scale,
         rmse_after_best_scale,
         rel_mse_after_best_scale: Some(rel_mse(&rescaled, reference, REL_MSE_EPS)?),
-        flip_after_best_scale: Some(crate::flip(&rescaled, reference, tone)?),
+        flip_after_best_scale: Some(flip_after_best_scale?),
         flux_ratio,
         flux_ratio_image,
         rel_mse_after_flux,

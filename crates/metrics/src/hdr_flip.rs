@@ -30,6 +30,8 @@
 //! fixture (`tests/data/hdr_flip_fixture.json`, made with flip-evaluator 1.7) the mean
 //! differs by less than 1e-3 (see `tests/hdr_flip.rs`).
 
+use rayon::prelude::*;
+
 use crate::error_metrics::check_pair;
 use crate::{HdrImage, MetricsError, luminance};
 
@@ -159,14 +161,22 @@ pub fn hdr_flip_with_exposures(
     }
     let exposures = (stop - start).ceil().max(2.0) as u32;
     let step = (stop - start) / (exposures - 1) as f32;
-    let mut map = vec![0.0f32; test.pixels.len()];
-    for i in 0..exposures {
-        let e = start + i as f32 * step;
-        let ldr = crate::flip::flip_ldr(&exposed(test, e), &exposed(reference, e));
-        for (m, v) in map.iter_mut().zip(ldr) {
-            *m = m.max(v);
-        }
-    }
+    // The exposures are independent LDR-FLIPs (NVIDIA's code runs each on one thread):
+    // they run in parallel and meet in a per-pixel maximum, which does not depend on the
+    // order, so the map is the same bit for bit as the sequential loop's.
+    let map = (0..exposures)
+        .into_par_iter()
+        .map(|i| {
+            let e = start + i as f32 * step;
+            crate::flip::flip_ldr(&exposed(test, e), &exposed(reference, e))
+        })
+        .reduce_with(|mut a, b| {
+            for (m, v) in a.iter_mut().zip(b) {
+                *m = m.max(v);
+            }
+            a
+        })
+        .unwrap_or_else(|| vec![0.0; test.pixels.len()]);
     let mean = map.iter().map(|&v| f64::from(v)).sum::<f64>() / map.len() as f64;
     Ok(HdrFlip {
         mean,
