@@ -131,7 +131,8 @@ pub struct Manifest {
     pub runs: Vec<RunStatus>,
     /// References that were missing and not rendered: `<scene> <w>x<h>`.
     pub missing_references: Vec<String>,
-    /// References rendered for this reproduction: `<scene> <w>x<h> (<photons> photons)`.
+    /// References rendered for this reproduction: `<scene> <w>x<h> (<photons> photons,
+    /// <wall> s)` (the seconds absent in manifests written before they were recorded).
     pub rendered_references: Vec<String>,
 }
 
@@ -563,6 +564,7 @@ fn ensure_references(
                 let dir = crate::references::cache_dir(&args.references, scene);
                 let progress = bar(budget.photons, &format!("photons, reference {label}"));
                 let tick = |done: u64| progress.set_position(done);
+                let started = Instant::now();
                 let rel = crate::reference_cmd::render_into(
                     &dir,
                     scene,
@@ -573,13 +575,17 @@ fn ensure_references(
                 )
                 .with_context(|| format!("rendering the reference of {label}"))?;
                 progress.finish_and_clear();
+                let wall_s = started.elapsed().as_secs_f64();
                 eprintln!(
-                    "reference {label}: {} photons, mean relative standard error {:.1}% -> {}",
+                    "reference {label}: {} photons in {wall_s:.1} s, mean relative standard error {:.1}% -> {}",
                     budget.photons,
                     100.0 * rel,
                     dir.display()
                 );
-                rendered.push(format!("{label} ({} photons)", budget.photons));
+                rendered.push(format!(
+                    "{label} ({} photons, {wall_s:.1} s)",
+                    budget.photons
+                ));
             }
             None => missing.push(label),
         }

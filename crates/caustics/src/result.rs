@@ -68,6 +68,31 @@ pub struct RunResult {
     /// --instrumentation-overhead`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub instrumentation: Option<Instrumentation>,
+    /// Where the run's wall-clock time went on this machine (absent in files before it
+    /// existed).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub wall: Option<RunWall>,
+}
+
+/// A run's CPU wall-clock time by phase, in seconds: what a reproduction's time is made
+/// of (the GPU's own time is in [`Timing`]). The phases add up to `total_s`.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct RunWall {
+    /// From the scene handed to the run until `result.json` is written.
+    pub total_s: f64,
+    /// Parameters, the reference read from the cache, adapter and device, scene upload,
+    /// the method's pipelines and buffers: everything before the first frame.
+    pub setup_s: f64,
+    /// Warm-up, timed and count frames (each recorded, submitted and waited for), the
+    /// queries' and counters' readback and the timed frame's images.
+    pub frames_s: f64,
+    /// The scoring frame's N² camera sub-frames ([`ScoringInfo::wall_ms`]).
+    pub scoring_frame_s: f64,
+    /// Errors against the reference (FLIP, HDR-FLIP, SSIM, relMSE...) and error maps.
+    pub errors_s: f64,
+    /// Rooflines, images (EXR, PNG, heatmaps) and `result.json` written.
+    pub writing_s: f64,
 }
 
 /// The cost of measuring: CPU wall time per frame (record, submit, wait for the GPU)

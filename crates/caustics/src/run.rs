@@ -14,7 +14,7 @@ use caustics_scene::Scene;
 
 use crate::result::{
     ErrorReport, Fragments, FrameCounts, Instrumentation, Memory, MethodRun, PassFragments,
-    PassTiming, RunResult, SCHEMA_VERSION, SceneInfo, ScoringInfo, Timing, ToneMapInfo,
+    PassTiming, RunResult, RunWall, SCHEMA_VERSION, SceneInfo, ScoringInfo, Timing, ToneMapInfo,
 };
 use crate::stats::summarize;
 use crate::{machine, registry};
@@ -193,6 +193,7 @@ pub fn run(o: &RunOptions) -> Result<RunOutcome> {
 /// [`run`] on a scene already loaded (and possibly changed, e.g. its camera's
 /// resolution by `caustics reproduce`); `o.scene` is not read.
 pub fn run_scene(o: &RunOptions, scene: Scene) -> Result<RunOutcome> {
+    let started = std::time::Instant::now();
     validate_options(o)?;
     let info = registry::find(&o.method)?;
     let params = given_params(o)?;
@@ -224,6 +225,8 @@ pub fn run_scene(o: &RunOptions, scene: Scene) -> Result<RunOutcome> {
     // Warm-up and timed frames with counting off, then one count frame. With
     // --instrumentation-overhead each timed frame is followed by a bare one: the same
     // frame with no queries at all, so the two alternate and share the machine's state.
+    let frames_started = std::time::Instant::now();
+    let setup_s = (frames_started - started).as_secs_f64();
     let mut profiler = PassProfiler::new(&ctx, o.warmup + o.frames + 1);
     let mut bare_profiler = PassProfiler::unmeasured(o.frames);
     for i in 0..o.warmup + o.frames + 1 {
@@ -283,6 +286,7 @@ pub fn run_scene(o: &RunOptions, scene: Scene) -> Result<RunOutcome> {
 
     // The scoring frame: N×N sub-pixel offsets averaged, outside the timed frames.
     let score_started = std::time::Instant::now();
+    let frames_s = (score_started - frames_started).as_secs_f64();
     let mut accumulator = caustics_gpu::ScoreAccumulator::new(&ctx, &renderer)?;
     let scored = caustics_method::render_scoring_frame(
         &ctx,
@@ -365,6 +369,7 @@ pub fn run_scene(o: &RunOptions, scene: Scene) -> Result<RunOutcome> {
         caustics_metrics::write_counts_png(&dir.join("fill_counts.png"), &fill, w, h)?;
         images.insert("fill_counts".into(), "fill_counts.png".into());
     }
+    let errors_started = std::time::Instant::now();
     let (errors, errors_1spp) = match &reference {
         Some(r) => {
             let noise = reference_noise(&r.path)?;
@@ -401,6 +406,18 @@ pub fn run_scene(o: &RunOptions, scene: Scene) -> Result<RunOutcome> {
         }
     };
 
+    let errors_s = errors_started.elapsed().as_secs_f64();
+    let total_s = started.elapsed().as_secs_f64();
+    let scoring_frame_s = scoring.wall_ms / 1e3;
+    let wall = RunWall {
+        total_s,
+        setup_s,
+        frames_s,
+        scoring_frame_s,
+        errors_s,
+        // The rest: images converted and written, rooflines, tone maps.
+        writing_s: (total_s - setup_s - frames_s - scoring_frame_s - errors_s).max(0.0),
+    };
     let result = RunResult {
         schema_version: SCHEMA_VERSION,
         build: machine::build(),
@@ -439,6 +456,7 @@ pub fn run_scene(o: &RunOptions, scene: Scene) -> Result<RunOutcome> {
         errors_1spp,
         roofline,
         instrumentation,
+        wall: Some(wall),
     };
     let json = serde_json::to_vec_pretty(&result)?;
     caustics_metrics::atomic_write(&dir.join("result.json"), &json)?;

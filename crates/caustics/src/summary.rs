@@ -45,6 +45,9 @@ pub struct Summary {
     pub not_run: usize,
     /// References that were missing: those runs have no errors.
     pub missing_references: Vec<String>,
+    /// References this reproduction rendered, with their photons and wall seconds.
+    #[serde(default)]
+    pub rendered_references: Vec<String>,
     /// One row per run, in experiment order.
     pub runs: Vec<Row>,
     /// The figures the experiment declares, as drawn (`figures/`).
@@ -158,6 +161,9 @@ pub struct Row {
     /// Every pass against the adapter's ceilings (result.json's `roofline`).
     #[serde(default)]
     pub roofline: Option<crate::roofline::RooflineReport>,
+    /// The run's CPU wall time by phase (result.json's `wall`).
+    #[serde(default)]
+    pub wall: Option<crate::result::RunWall>,
 }
 
 /// A number from the paper beside a run.
@@ -396,6 +402,7 @@ pub fn build(out: &Path, e: &Experiment, m: &Manifest) -> Result<Summary> {
                 })
                 .unwrap_or_default(),
             roofline: result.as_ref().and_then(|r| r.roofline.clone()),
+            wall: result.as_ref().and_then(|r| r.wall.clone()),
         });
     }
     let distinct = |mut v: Vec<String>| {
@@ -421,6 +428,7 @@ pub fn build(out: &Path, e: &Experiment, m: &Manifest) -> Result<Summary> {
         failed: count("failed"),
         not_run: count(crate::reproduce::NOT_RUN),
         missing_references: m.missing_references.clone(),
+        rendered_references: m.rendered_references.clone(),
         runs: rows,
         figures: Vec::new(),
     })
@@ -545,6 +553,11 @@ pub fn num(v: f64) -> String {
     } else {
         format!("{v:.4}")
     }
+}
+
+/// Seconds of wall time, to a tenth.
+fn secs(v: f64) -> String {
+    format!("{v:.1}")
 }
 
 fn paper_cell(r: &Row) -> String {
@@ -891,6 +904,7 @@ pub fn markdown(s: &Summary, plots: &[String]) -> String {
         );
     }
     roofline_section(&mut md, s);
+    wall_section(&mut md, s);
     let others: Vec<&Row> = s.runs.iter().filter(|r| r.status != "done").collect();
     if !others.is_empty() {
         let _ = writeln!(md, "## Not run\n\n| run | status | reason |\n|---|---|---|");
@@ -912,6 +926,89 @@ pub fn markdown(s: &Summary, plots: &[String]) -> String {
         }
     }
     md
+}
+
+/// "Where the time went": each method's runs' wall time on this machine by phase, and
+/// the slowest runs, so a long reproduction says what to shorten.
+fn wall_section(md: &mut String, s: &Summary) {
+    let walls: Vec<(&Row, &crate::result::RunWall)> = s
+        .runs
+        .iter()
+        .filter_map(|r| Some((r, r.wall.as_ref()?)))
+        .collect();
+    if walls.is_empty() && s.rendered_references.is_empty() {
+        return;
+    }
+    let _ = writeln!(md, "## Where the time went\n");
+    if !s.rendered_references.is_empty() {
+        let _ = writeln!(
+            md,
+            "References rendered on the CPU first: {}.\n",
+            s.rendered_references.join("; ")
+        );
+    }
+    if walls.is_empty() {
+        return;
+    }
+    let all_s: f64 = walls.iter().map(|(_, w)| w.total_s).sum();
+    let _ = writeln!(
+        md,
+        "CPU wall seconds of the {} runs that recorded it ({} s in all; references not \
+         included), by phase: setup (device, upload, pipelines), frames (warm-up, timed, \
+         count), the scoring frame's sub-frames, errors (FLIP, HDR-FLIP, SSIM...), \
+         writing (images, result).\n\n\
+         | method | runs | total s | share | setup | frames | scoring frame | errors | \
+         writing | slowest run (s) |\n|---|---|---|---|---|---|---|---|---|---|",
+        walls.len(),
+        secs(all_s)
+    );
+    let mut methods: Vec<&str> = walls.iter().map(|(r, _)| r.method.as_str()).collect();
+    methods.sort();
+    methods.dedup();
+    let mut by_total: Vec<(&str, f64)> = methods
+        .iter()
+        .map(|m| {
+            let t = walls
+                .iter()
+                .filter(|(r, _)| r.method == *m)
+                .map(|(_, w)| w.total_s)
+                .sum();
+            (*m, t)
+        })
+        .collect();
+    by_total.sort_by(|a, b| b.1.total_cmp(&a.1));
+    for (m, total) in by_total {
+        let mine: Vec<&(&Row, &crate::result::RunWall)> =
+            walls.iter().filter(|(r, _)| r.method == m).collect();
+        let sum =
+            |f: fn(&crate::result::RunWall) -> f64| -> f64 { mine.iter().map(|(_, w)| f(w)).sum() };
+        let slowest = mine
+            .iter()
+            .max_by(|a, b| a.1.total_s.total_cmp(&b.1.total_s))
+            .map(|(r, w)| {
+                format!(
+                    "{} {} ({})",
+                    r.scene,
+                    params_cell(&r.params),
+                    secs(w.total_s)
+                )
+            })
+            .unwrap_or_default();
+        let _ = writeln!(
+            md,
+            "| {m} | {} | {} | {:.0}% | {} | {} | {} | {} | {} | {} |",
+            mine.len(),
+            secs(total),
+            100.0 * total / all_s.max(f64::MIN_POSITIVE),
+            secs(sum(|w| w.setup_s)),
+            secs(sum(|w| w.frames_s)),
+            secs(sum(|w| w.scoring_frame_s)),
+            secs(sum(|w| w.errors_s)),
+            secs(sum(|w| w.writing_s)),
+            slowest
+        );
+    }
+    let _ = writeln!(md);
 }
 
 /// A done run with no figures, for tests.
@@ -947,6 +1044,7 @@ pub(crate) fn test_row(method: &str) -> Row {
         pass_gpu_ms: Default::default(),
         pass_fragments: Default::default(),
         roofline: None,
+        wall: None,
     }
 }
 
@@ -967,6 +1065,7 @@ pub(crate) fn test_summary(runs: Vec<Row>) -> Summary {
         failed: 0,
         not_run: 0,
         missing_references: vec![],
+        rendered_references: vec![],
         runs,
         figures: vec![],
     }
@@ -1012,6 +1111,45 @@ pub(crate) fn test_roofline(method: &str) -> crate::roofline::RooflineReport {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_time_section_sums_each_methods_phases_slowest_first() {
+        let wall = |total_s: f64| crate::result::RunWall {
+            total_s,
+            setup_s: 1.0,
+            frames_s: 2.0,
+            scoring_frame_s: total_s - 5.0,
+            errors_s: 1.5,
+            writing_s: 0.5,
+        };
+        let mut a = test_row("beams");
+        a.wall = Some(wall(10.0));
+        let mut b = test_row("beams");
+        b.scene = "t".into();
+        b.wall = Some(wall(20.0));
+        let mut c = test_row("pinhole");
+        c.wall = Some(wall(70.0));
+        let older = test_row("splatting");
+        let md = markdown(&summary(vec![a, b, c, older]), &[]);
+        let section = md
+            .split("## Where the time went")
+            .nth(1)
+            .expect("a time section");
+        assert!(
+            section.contains("of the 3 runs that recorded it (100.0 s in all"),
+            "{section}"
+        );
+        let pinhole = section
+            .find("| pinhole | 1 | 70.0 | 70% |")
+            .expect("pinhole row");
+        let beams = section
+            .find("| beams | 2 | 30.0 | 30% | 2.0 | 4.0 | 20.0 | 3.0 | 1.0 | t defaults (20.0) |")
+            .unwrap_or_else(|| panic!("beams row in {section}"));
+        assert!(pinhole < beams, "the costliest method first: {section}");
+        assert!(!section.contains("splatting"), "{section}");
+        // No run with a wall record (older files): no section.
+        assert!(!markdown(&summary(vec![test_row("beams")]), &[]).contains("Where the time"));
+    }
 
     #[test]
     fn the_roofline_section_lists_each_runs_method_passes() {

@@ -13,10 +13,14 @@
 @group(1) @binding(0) var<uniform> params: Params;
 @group(1) @binding(1) var<storage, read> samples: array<Sample>;
 @group(1) @binding(2) var<storage, read> sample_light: array<vec4<f32>>;
-// receiver fragments, pairs (lo, hi), texture fetches (lo, hi): count frames only.
+// receiver fragments, pairs (lo, hi), texture fetches (lo, hi), visibility tests (lo,
+// hi): count frames only.
 @group(1) @binding(3) var<storage, read_write> counters: array<atomic<u32>>;
 @group(1) @binding(4) var light_map: texture_2d<f32>;
 @group(1) @binding(5) var light_sampler: sampler;
+
+// Receiver-to-sample segments traced by this invocation (sample_irradiance).
+var<private> visibility_tests: u32 = 0u;
 
 struct VsOut {
     @builtin(position) clip: vec4<f32>,
@@ -162,13 +166,6 @@ fn sample_irradiance(i: u32, mode: u32, light: GpuLight, x: vec3<f32>, nx: vec3<
         // incidence = angle of reflection = theta_s).
         radiance *= fresnel_dielectric(cos_s, select(generator_material.ior, 1.0 / generator_material.ior, side > 0.0));
     }
-    // The segment from the (lifted) receiver point exactly to the sample; hits
-    // within 1e-3 of its length from the sample are the sample's own surface.
-    let seg = p - x_start;
-    let seg_len = length(seg);
-    if occluded(x_start, seg / seg_len, seg_len, 0.0, max(s.extra.y, 1e-3 * seg_len)) {
-        return vec4<f32>(0.0);
-    }
     let din = -wo;
     let path = trace_path(mode, light, din, p, n, eta);
     if path.lookup.w == 0.0 {
@@ -178,6 +175,11 @@ fn sample_irradiance(i: u32, mode: u32, light: GpuLight, x: vec3<f32>, nx: vec3<
         radiance = path.transmit * light_radiance(light, params, path.origin + 1e-4 * normalize(path.origin - objects[params.generator].p0.xyz), 0.0);
     } else {
         radiance *= path.transmit;
+    }
+    // Off the map's one face no footprint can reach the light (filtered_coverage), so
+    // the four neighbour paths of the filter are not traced for it.
+    if !on_light_face(path.lookup.xyz) {
+        return vec4<f32>(0.0);
     }
     var gx = vec3<f32>(0.0);
     var gy = vec3<f32>(0.0);
@@ -198,6 +200,20 @@ fn sample_irradiance(i: u32, mode: u32, light: GpuLight, x: vec3<f32>, nx: vec3<
             neighbour_lookup(mode, light, x, din, p, -r * t2, n2m, eta));
     }
     let fetched = filtered_coverage(path.lookup.xyz, gx, gy);
+    // Visibility last: the receiver-to-sample segment is traced (the scene's BVH) only
+    // for the few pairs whose lookup lands on the light; most see none of it, and an
+    // occluded pair adds nothing either way, so the image is the same as testing first.
+    if fetched.x == 0.0 {
+        return vec4<f32>(0.0, 0.0, 0.0, fetched.y);
+    }
+    // The segment from the (lifted) receiver point exactly to the sample; hits
+    // within 1e-3 of its length from the sample are the sample's own surface.
+    visibility_tests += 1u;
+    let seg = p - x_start;
+    let seg_len = length(seg);
+    if occluded(x_start, seg / seg_len, seg_len, 0.0, max(s.extra.y, 1e-3 * seg_len)) {
+        return vec4<f32>(0.0, 0.0, 0.0, fetched.y);
+    }
     return vec4<f32>(radiance * (fetched.x * cos_s * cos_x * s.pos.w / (d2 + s.normal.w)), fetched.y);
 }
 
@@ -233,6 +249,7 @@ fn fs_gather(in: VsOut) -> @location(0) vec4<f32> {
         atomicAdd(&counters[0], 1u);
         add_wide(1u, last - first);
         add_wide(3u, fetches);
+        add_wide(5u, visibility_tests);
     }
     let albedo = materials[g.material].color.xyz;
     return vec4<f32>(albedo * INV_PI * irradiance, 1.0);
@@ -254,10 +271,15 @@ fn map_uv(v: vec3<f32>) -> vec3<f32> {
 // adapter. Returns (coverage, probes taken).
 const MAX_ANISOTROPY: f32 = 16.0;
 
+// The light covers less than 45° around the axis: nothing outside the face.
+fn on_light_face(v: vec3<f32>) -> bool {
+    let c = map_uv(v);
+    return c.z > 0.0 && all(c.xy >= vec2<f32>(0.0)) && all(c.xy <= vec2<f32>(1.0));
+}
+
 fn filtered_coverage(v: vec3<f32>, gx: vec3<f32>, gy: vec3<f32>) -> vec2<f32> {
     let c = map_uv(v);
-    // The light covers less than 45° around the axis: nothing outside the face.
-    if c.z <= 0.0 || any(c.xy < vec2<f32>(0.0)) || any(c.xy > vec2<f32>(1.0)) {
+    if !on_light_face(v) {
         return vec2<f32>(0.0, 0.0);
     }
     let size = f32(textureDimensions(light_map).x);

@@ -373,7 +373,8 @@ const COUNTER_DOCS: &[CounterDoc] = &[
     CounterDoc { name: "camera_pixels", doc: "pixels of the camera image (width x height), each covered by every gather pass: set by the scene, not counted on the GPU" },
     CounterDoc { name: "receiver_fragments", doc: "gather fragments on a diffuse receiver pixel in the count frame, over all passes (pixels that see a diffuse surface x passes; the others are discarded)" },
     CounterDoc { name: "sample_pixel_pairs", doc: "(receiver pixel, sample) pairs the gather loop evaluated in the count frame: diffuse receiver pixels x samples (with reflections each pair also evaluates the reflected path, counted once)" },
-    CounterDoc { name: "texture_fetches", doc: "light-map probes taken in the count frame: 1 per lookup whose filter footprint is within a texel (always, with filtering off), up to 16 along an anisotropic filter footprint, none for a pair culled as facing away, occluded, without a path or outside the light (both paths with reflections)" },
+    CounterDoc { name: "texture_fetches", doc: "light-map probes taken in the count frame: 1 per lookup whose filter footprint is within a texel (always, with filtering off), up to 16 along an anisotropic filter footprint, none for a pair culled as facing away, without a path or outside the light map's face (both paths with reflections); the visibility test comes after the lookup, so an occluded pair's probes count" },
+    CounterDoc { name: "visibility_tests", doc: "receiver-to-sample segments traced against the scene in the count frame: only the pairs whose lookup lands on the light (the others add nothing whether occluded or not); visibility_tests / sample_pixel_pairs is the share the gather pays a ray for" },
 ];
 
 /// `pinhole` bound to one scene.
@@ -474,7 +475,8 @@ impl Buffers {
                 samples.len() as u64 * 16,
                 wgpu::BufferUsages::STORAGE,
             ),
-            // receiver fragments, pairs (lo, hi), texture fetches (lo, hi): gather.wgsl.
+            // receiver fragments, pairs (lo, hi), texture fetches (lo, hi), visibility
+            // tests (lo, hi): gather.wgsl.
             counters: empty(
                 "pinhole counters",
                 32,
@@ -645,6 +647,7 @@ impl CausticsMethod for Pinhole {
         out.insert("receiver_fragments".into(), c[0] as u64);
         out.insert("sample_pixel_pairs".into(), wide(1));
         out.insert("texture_fetches".into(), wide(3));
+        out.insert("visibility_tests".into(), wide(5));
         out.insert("camera_pixels".into(), self.receiver_pixels_hint);
         Ok(out)
     }
