@@ -54,7 +54,7 @@ fn args(tmp: &Path, exp: &Path, out: &str, shard: Option<&str>) -> ReproduceArgs
     }
 }
 
-/// Everything in the summary but the timings, machine and build.
+/// Everything in the summary but the timings (GPU and wall), machine and build.
 fn deterministic(dir: &Path) -> Vec<serde_json::Value> {
     let s = read_summary(dir).expect("summary");
     s.runs
@@ -65,6 +65,7 @@ fn deterministic(dir: &Path) -> Vec<serde_json::Value> {
             o.remove("method_gpu_ms");
             o.remove("frame_gpu_ms");
             o.remove("pass_gpu_ms");
+            o.remove("wall");
             v
         })
         .collect()
@@ -104,7 +105,34 @@ fn reproduce_then_shards_merged_equal_the_unsharded_run() {
     for r in s.runs.iter().filter(|r| r.status == "done") {
         assert!(r.errors.is_some() && r.fragments.is_some(), "{}", r.key);
         assert!(r.method_gpu_ms.is_some(), "{}", r.key);
+        // Where the run's time went: positive phases that add up to its total.
+        let w = r
+            .wall
+            .as_ref()
+            .unwrap_or_else(|| panic!("{}: no wall", r.key));
+        let phases = w.setup_s + w.frames_s + w.scoring_frame_s + w.errors_s + w.writing_s;
+        assert!(
+            w.total_s > 0.0 && w.frames_s > 0.0 && w.errors_s > 0.0,
+            "{w:?}"
+        );
+        assert!(
+            (phases - w.total_s).abs() < 1e-6 * w.total_s.max(1.0),
+            "{w:?}"
+        );
     }
+    let md = std::fs::read_to_string(dir.join("summary.md")).expect("summary.md");
+    let time = md
+        .split("## Where the time went")
+        .nth(1)
+        .expect("a time section");
+    assert!(
+        manifest
+            .rendered_references
+            .iter()
+            .all(|r| r.ends_with(" s)") && time.contains(r.as_str())),
+        "{:?} in {time}",
+        manifest.rendered_references
+    );
     // The paper's figure sits beside its run.
     let ring50 = s
         .runs
