@@ -197,7 +197,7 @@ pub fn reproduce(args: &ReproduceArgs) -> Result<Outcome> {
             if !out.join("manifest.json").exists() && out.join("runs").is_dir() {
                 // Killed before its manifest (a lease or deadline ran out): summarize the
                 // runs that completed, list the others as not run.
-                let manifest = interrupted_manifest(e, &out, args.scale);
+                let manifest = interrupted_manifest(e, &out, args.scale)?;
                 let n_done = manifest.runs.iter().filter(|r| r.status == "done").count();
                 eprintln!(
                     "{}: no manifest.json (an interrupted reproduction): summarizing its {n_done} complete runs of {}, the others listed as not run",
@@ -609,25 +609,38 @@ fn ensure_references(
 /// its `result.json` (written last of a run's files) is done, every other is not run.
 /// The experiment is taken as the one the folder was made from; its runs' own
 /// `result.json` name their scene, method and parameters.
-fn interrupted_manifest(e: &Experiment, out: &Path, scale: f64) -> Manifest {
-    let runs = e
-        .runs
-        .iter()
-        .map(|spec| {
-            let rel = run_rel(spec);
-            let complete = out.join(&rel).join("result.json").is_file();
-            RunStatus {
-                index: spec.index,
-                key: spec.key(),
-                status: if complete { "done" } else { NOT_RUN }.into(),
-                dir: complete.then(|| rel.display().to_string()),
-                reason: (!complete).then(|| {
-                    "the reproduction was interrupted before this run completed".to_owned()
-                }),
+///
+/// No manifest records the `--scale` the runs were made at, so each complete run's
+/// resolution must be the one `scale` gives its scene: a summary under another scale
+/// would label the runs with a resolution they do not have.
+fn interrupted_manifest(e: &Experiment, out: &Path, scale: f64) -> Result<Manifest> {
+    let mut runs = Vec::new();
+    for spec in &e.runs {
+        let rel = run_rel(spec);
+        let complete = out.join(&rel).join("result.json").is_file();
+        if complete {
+            let r = crate::summary::read_result(&out.join(&rel))?;
+            let (w, h) = (spec.scene.camera.width, spec.scene.camera.height);
+            if (r.scene.width, r.scene.height) != (w, h) {
+                bail!(
+                    "{}: made at {}x{}, but --scale {scale} gives {}'s run {w}x{h}: pass the --scale the reproduction was made with",
+                    out.join(&rel).join("result.json").display(),
+                    r.scene.width,
+                    r.scene.height,
+                    spec.key()
+                );
             }
-        })
-        .collect();
-    Manifest {
+        }
+        runs.push(RunStatus {
+            index: spec.index,
+            key: spec.key(),
+            status: if complete { "done" } else { NOT_RUN }.into(),
+            dir: complete.then(|| rel.display().to_string()),
+            reason: (!complete)
+                .then(|| "the reproduction was interrupted before this run completed".to_owned()),
+        });
+    }
+    Ok(Manifest {
         schema_version: MANIFEST_VERSION,
         experiment: e.def.name.clone(),
         experiment_hash: e.hash.clone(),
@@ -638,7 +651,7 @@ fn interrupted_manifest(e: &Experiment, out: &Path, scale: f64) -> Manifest {
         runs,
         missing_references: Vec::new(),
         rendered_references: Vec::new(),
-    }
+    })
 }
 
 fn run_rel(spec: &RunSpec) -> PathBuf {

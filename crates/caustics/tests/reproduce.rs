@@ -259,6 +259,20 @@ fn reproduce_then_shards_merged_equal_the_unsharded_run() {
     std::fs::remove_file(killed_dir.join("manifest.json")).expect("rm manifest");
     std::fs::remove_file(killed_dir.join("summary.json")).expect("rm summary");
     std::fs::remove_file(killed_dir.join(ring50_rel).join("result.json")).expect("rm result");
+    // Under another --scale its runs would be labelled with sizes they do not have: an
+    // error naming a run's file and the flag, and nothing written.
+    let wrong_scale = reproduce(&ReproduceArgs {
+        summary_only: true,
+        scale: 0.5,
+        ..args(t, &exp, "killed", None)
+    })
+    .expect_err("another scale than the runs were made at")
+    .to_string();
+    assert!(
+        wrong_scale.contains("result.json") && wrong_scale.contains("--scale 0.5"),
+        "{wrong_scale}"
+    );
+    assert!(!killed_dir.join("manifest.json").exists());
     reproduce(&ReproduceArgs {
         summary_only: true,
         ..args(t, &exp, "killed", None)

@@ -21,8 +21,9 @@
 //! caustic image outside the lit region), the median is 0 and the authors' floor puts the
 //! stop exposure at `log2(x_max / f32::EPSILON)` ≈ 24 stops: about 25–30 exposures, where
 //! even a 1e-6 W·m⁻²·sr⁻¹ speck is shown bright. That is the published rule and it is kept
-//! (numbers stay comparable with the authors' tool); the cost is about 8 s per call at
-//! 1024×768 on one 2-core CI machine. [`hdr_flip_with_exposures`] takes a stated bracket.
+//! (numbers stay comparable with the authors' tool); the cost was about 8 s per call at
+//! 1024×768 on one 2-core CI machine with the exposures run one after another (they now
+//! run in parallel). [`hdr_flip_with_exposures`] takes a stated bracket.
 //!
 //! **8-bit step.** `nv-flip` 0.1.2 takes LDR images only as 8-bit sRGB (its sys crate has
 //! no float LDR entry, and this workspace forbids `unsafe`), so each exposure's sRGB image
