@@ -273,13 +273,17 @@ const MAX_ANISOTROPY: f32 = 16.0;
 
 // The light covers less than 45° around the axis: nothing outside the face.
 fn on_light_face(v: vec3<f32>) -> bool {
-    let c = map_uv(v);
+    return on_face(map_uv(v));
+}
+
+// Whether map coordinates c (map_uv) lie on the map's face, in front.
+fn on_face(c: vec3<f32>) -> bool {
     return c.z > 0.0 && all(c.xy >= vec2<f32>(0.0)) && all(c.xy <= vec2<f32>(1.0));
 }
 
 fn filtered_coverage(v: vec3<f32>, gx: vec3<f32>, gy: vec3<f32>) -> vec2<f32> {
     let c = map_uv(v);
-    if !on_light_face(v) {
+    if !on_face(c) {
         return vec2<f32>(0.0, 0.0);
     }
     let size = f32(textureDimensions(light_map).x);
