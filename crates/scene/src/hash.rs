@@ -183,5 +183,12 @@ pub(crate) fn scene_hash(scene: &Scene) -> u64 {
             }
         }
     }
+    // The instant is part of the key of an animated scene (two instants may pose the
+    // same geometry, e.g. outside a motion's keyframes, yet are different frames of a
+    // sequence); appended only away from t = 0 so that every earlier hash holds.
+    if scene.is_animated() && scene.time != 0.0 {
+        h.str("time");
+        h.f32(scene.time);
+    }
     h.0
 }

@@ -38,6 +38,7 @@
 //! Built-in scenes live in the workspace's `scenes/` folder: [`builtin_names`],
 //! [`resolve`].
 
+mod animation;
 mod camera;
 mod error;
 mod hash;
@@ -50,9 +51,14 @@ mod tessellate;
 mod validate;
 
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 pub use glam::{Mat3, Mat4, Vec2, Vec3, Vec4};
 
+pub use animation::{
+    Animation, GRAVITY_M_S2, Keyframe, MAX_KEYFRAMES, MAX_TIME_S, Motion, RigidPose,
+    wave_angular_frequency,
+};
 pub use camera::Camera;
 pub use error::SceneError;
 pub use light::{Light, Material, Medium, NamedMaterial};
@@ -78,8 +84,14 @@ pub struct Scene {
     pub medium: Option<Medium>,
     /// Materials in file order, then those derived from glTF files in load order.
     pub materials: Vec<NamedMaterial>,
-    /// The objects (a glTF file contributes one object per primitive).
+    /// The objects (a glTF file contributes one object per primitive), posed at `time`.
     pub objects: Vec<Object>,
+    /// The instant in seconds the objects and lights are posed at (the file's
+    /// `"time"`, default 0; [`Scene::at_time`] poses another).
+    pub time: f32,
+    /// What moves (object and light motions, travelling waves); `None` for a still
+    /// scene, which looks the same at every instant.
+    pub animation: Option<Arc<Animation>>,
 }
 
 /// One object: a shape and the index of its material in [`Scene::materials`].
@@ -127,6 +139,62 @@ impl Scene {
         validate::parse(json, source, base, limits)
     }
 
+    /// True if anything in the scene changes with time.
+    pub fn is_animated(&self) -> bool {
+        self.animation.as_ref().is_some_and(|a| a.moves())
+    }
+
+    /// The scene posed at `t` seconds: a still scene that every method and the
+    /// reference render as they render any scene (a still scene is returned as it is,
+    /// its `time` set). Errors if `t` is not a finite time within ±[`MAX_TIME_S`] or
+    /// a moving object leaves the coordinate range there.
+    pub fn at_time(&self, t: f32) -> Result<Scene, SceneError> {
+        let err = |json_path: String, message: String| SceneError::Invalid {
+            file: self.source.clone(),
+            json_path,
+            message,
+        };
+        if !(t.is_finite() && t.abs() <= MAX_TIME_S) {
+            return Err(err(
+                "time".into(),
+                format!("expected a time in seconds within ±{MAX_TIME_S:e}, got {t}"),
+            ));
+        }
+        let mut posed = self.clone();
+        posed.time = t;
+        if let Some(a) = &self.animation {
+            posed.objects = a.objects_at(t);
+            posed.lights = a.lights_at(t);
+            for (i, o) in posed.objects.iter().enumerate() {
+                let b = o.shape.bounds();
+                let reach = b.min.abs().max(b.max.abs()).max_element();
+                if !reach.is_finite() || reach > MAX_COORDINATE {
+                    return Err(err(
+                        format!("objects[{i}].motion"),
+                        format!(
+                            "at time {t} s the object reaches {reach} m from the origin: expected it within ±{MAX_COORDINATE:e} m"
+                        ),
+                    ));
+                }
+            }
+            for (i, l) in posed.lights.iter().enumerate() {
+                let p = match l {
+                    Light::Point { position, .. } | Light::Spot { position, .. } => *position,
+                    Light::Directional { .. } => Vec3::ZERO,
+                };
+                if !p.is_finite() || p.abs().max_element() > MAX_COORDINATE {
+                    return Err(err(
+                        format!("lights[{i}].motion"),
+                        format!(
+                            "at time {t} s the light is at {p}: expected it within ±{MAX_COORDINATE:e} m"
+                        ),
+                    ));
+                }
+            }
+        }
+        Ok(posed)
+    }
+
     /// Bounds of all objects.
     pub fn bounds(&self) -> Aabb {
         self.objects
@@ -163,7 +231,9 @@ impl Scene {
     /// FNV-1a 64 over a canonical byte encoding of the typed scene (see `hash.rs`):
     /// name, description, camera, lights, medium, materials and objects, every float
     /// as its little-endian bits, mesh objects by their world-space positions, normals
-    /// and indices (so the referenced mesh files' content is covered). It does not
+    /// and indices (so the referenced mesh files' content is covered), and the instant
+    /// of an animated scene posed away from t = 0 (a still scene, or any scene at
+    /// t = 0, hashes as before animation existed). It does not
     /// depend on the JSON formatting, on key order inside an object, or on where the
     /// file lies (`source` and mesh paths are excluded).
     pub fn hash_hex(&self) -> String {

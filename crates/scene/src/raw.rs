@@ -39,6 +39,10 @@ pub(crate) struct RawScene<'a> {
     pub(crate) materials: UniqueMap<'a>,
     #[serde(borrow)]
     pub(crate) objects: Vec<RawObject<'a>>,
+    /// The instant in seconds the scene is posed at (default 0); only matters where
+    /// something moves (`motion`, heightfield waves).
+    #[serde(default)]
+    pub(crate) time: Option<f32>,
 }
 
 /// `"camera"`.
@@ -79,6 +83,41 @@ pub(crate) struct RawObject<'a> {
     pub(crate) shape: &'a RawValue,
     #[serde(default)]
     pub(crate) material: Option<String>,
+    /// Rigid motion of the object from its rest pose (the shape as written).
+    #[serde(default)]
+    pub(crate) motion: Option<RawMotion>,
+}
+
+/// `"motion"` of an object or a light: either `velocity` and/or
+/// `angular_velocity_deg` (constant, from the rest pose at t = 0), or `keyframes`;
+/// `pivot` is the centre of rotation (default: the object's bounds centre, the light's
+/// position).
+#[derive(Clone, Deserialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawMotion {
+    /// m/s.
+    #[serde(default)]
+    pub(crate) velocity: Option<[f32; 3]>,
+    /// Rotation vector per second: unit axis × degrees per second.
+    #[serde(default)]
+    pub(crate) angular_velocity_deg: Option<[f32; 3]>,
+    /// Poses at instants, strictly increasing in time; held outside their range.
+    #[serde(default)]
+    pub(crate) keyframes: Option<Vec<RawKeyframe>>,
+    /// Centre of rotation at rest (m).
+    #[serde(default)]
+    pub(crate) pivot: Option<[f32; 3]>,
+}
+
+/// One keyframe: translation (m) and rotation vector (unit axis × degrees) from rest.
+#[derive(Clone, Deserialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawKeyframe {
+    pub(crate) time: f32,
+    #[serde(default)]
+    pub(crate) translate: [f32; 3],
+    #[serde(default)]
+    pub(crate) rotate_deg: [f32; 3],
 }
 
 /// `"materials"`: a JSON object whose keys must be unique (serde maps keep the last
@@ -175,6 +214,17 @@ pub(crate) enum RawLight {
     Spot(RawSpot),
 }
 
+impl RawLight {
+    /// The light's `"motion"`, if it has one.
+    pub(crate) fn motion(&self) -> Option<&RawMotion> {
+        match self {
+            RawLight::Directional(l) => l.motion.as_ref(),
+            RawLight::Point(l) => l.motion.as_ref(),
+            RawLight::Spot(l) => l.motion.as_ref(),
+        }
+    }
+}
+
 #[derive(Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawDirectional {
@@ -183,6 +233,9 @@ pub(crate) struct RawDirectional {
     _kind: IgnoredAny,
     pub(crate) direction: [f32; 3],
     pub(crate) irradiance: [f32; 3],
+    /// Rigid motion of the light (position and direction) from its rest pose.
+    #[serde(default)]
+    pub(crate) motion: Option<RawMotion>,
 }
 
 #[derive(Deserialize, schemars::JsonSchema)]
@@ -193,6 +246,9 @@ pub(crate) struct RawPoint {
     _kind: IgnoredAny,
     pub(crate) position: [f32; 3],
     pub(crate) intensity: [f32; 3],
+    /// Rigid motion of the light (position and direction) from its rest pose.
+    #[serde(default)]
+    pub(crate) motion: Option<RawMotion>,
 }
 
 #[derive(Deserialize, schemars::JsonSchema)]
@@ -207,6 +263,9 @@ pub(crate) struct RawSpot {
     pub(crate) cone_deg: f32,
     #[serde(default)]
     pub(crate) falloff_deg: Option<f32>,
+    /// Rigid motion of the light (position and direction) from its rest pose.
+    #[serde(default)]
+    pub(crate) motion: Option<RawMotion>,
 }
 
 /// `"materials"` values.
@@ -294,6 +353,10 @@ pub(crate) struct RawWave {
     pub(crate) direction: [f32; 2],
     #[serde(default)]
     pub(crate) phase: f32,
+    /// Phase speed in m/s along `direction` (0: still); default: deep-water gravity
+    /// waves, ω² = g·k.
+    #[serde(default)]
+    pub(crate) speed_m_s: Option<f32>,
 }
 
 #[derive(Deserialize, schemars::JsonSchema)]

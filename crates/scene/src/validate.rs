@@ -3,20 +3,26 @@
 
 use std::cell::RefCell;
 use std::path::Path;
+use std::sync::Arc;
 
 use glam::{Vec2, Vec3};
 
+use crate::animation::{
+    Animation, Keyframe, MAX_KEYFRAMES, MAX_TIME_S, Motion, wave_angular_frequency,
+};
 use crate::light::{Light, Material, Medium, NamedMaterial};
 use crate::limits::{Limits, MAX_COORDINATE};
 use crate::mesh::{Budget, MeshError, MeshTransform, invalid, load_gltf, load_obj};
 use crate::raw::{self, RawLight, RawMaterial, RawScene, RawShape, Source};
-use crate::shape::{Heightfield, Shape, Wave};
+use crate::shape::{Aabb, Heightfield, Shape, Wave};
 use crate::{Camera, Object, Scene, SceneError};
 
 /// Largest image side and heightfield resolution accepted.
 pub(crate) const MAX_IMAGE_SIDE: u32 = 16384;
 /// Largest heightfield vertex count per axis.
 pub(crate) const MAX_RESOLUTION: u32 = 4096;
+/// Largest |phase speed| of a wave (m/s).
+const MAX_WAVE_SPEED_M_S: f32 = 1.0e4;
 
 /// Parses and validates a whole document.
 pub(crate) fn parse(
@@ -140,10 +146,32 @@ impl Builder<'_> {
             return Err(self.err("lights", "expected at least one light"));
         }
         let mut lights = Vec::with_capacity(raw.lights.len());
+        let mut light_motion = Vec::with_capacity(raw.lights.len());
         for (i, l) in raw.lights.iter().enumerate() {
             let path = format!("lights[{i}]");
             let parsed = RawLight::parse(self.src, l, &path)?;
-            lights.push(self.light(&path, parsed)?);
+            let motion = parsed.motion().cloned();
+            let light = self.light(&path, parsed)?;
+            let motion = match motion {
+                None => None,
+                Some(m) => {
+                    let mpath = format!("{path}.motion");
+                    let pivot = match &light {
+                        Light::Directional { .. } => Vec3::ZERO,
+                        Light::Point { position, .. } | Light::Spot { position, .. } => *position,
+                    };
+                    let m = self.motion(&mpath, &m, pivot)?;
+                    if matches!(light, Light::Directional { .. }) && !m.is_rotation_only() {
+                        return Err(self.err(
+                            mpath,
+                            "a directional light has no position: expected a rotation only (angular_velocity_deg or keyframes' rotate_deg), got a translation",
+                        ));
+                    }
+                    Some(m)
+                }
+            };
+            lights.push(light);
+            light_motion.push(motion);
         }
         let medium = raw.medium.as_ref().map(|m| self.medium(m)).transpose()?;
         let mut materials = Vec::with_capacity(raw.materials.0.len());
@@ -162,10 +190,54 @@ impl Builder<'_> {
             return Err(self.err("objects", "expected at least one object"));
         }
         let mut objects = Vec::with_capacity(raw.objects.len());
+        let mut object_motion = Vec::with_capacity(raw.objects.len());
+        let mut wave_omega = Vec::with_capacity(raw.objects.len());
         for (i, o) in raw.objects.iter().enumerate() {
-            self.object(i, o, &mut materials, &mut objects)?;
+            let first = objects.len();
+            let omega = self.object(i, o, &mut materials, &mut objects)?;
+            let added = &objects[first..];
+            let motion = match &o.motion {
+                None => None,
+                Some(m) => {
+                    let mpath = format!("objects[{i}].motion");
+                    let bounds = added
+                        .iter()
+                        .fold(Aabb::EMPTY, |b, o| b.union(&o.shape.bounds()));
+                    let m = self.motion(&mpath, m, bounds.center())?;
+                    if let Some(kind) = added
+                        .iter()
+                        .map(|o| &o.shape)
+                        .find(|s| matches!(s, Shape::Quad { .. } | Shape::Heightfield(_)))
+                        .map(Shape::kind)
+                        .filter(|_| !m.is_translation_only())
+                    {
+                        return Err(self.err(
+                            mpath,
+                            format!(
+                                "a {kind} moves by translation only (its axes follow from its normal, its waves from world x, z): expected no rotation, or make it a mesh"
+                            ),
+                        ));
+                    }
+                    Some(m)
+                }
+            };
+            for k in 0..added.len() {
+                object_motion.push(motion.clone());
+                wave_omega.push(if k == 0 { omega.clone() } else { Vec::new() });
+            }
         }
-        Ok(Scene {
+        let time = match raw.time {
+            None => 0.0,
+            Some(t) => self.time("time", t)?,
+        };
+        let animation = Animation {
+            rest_objects: objects.clone(),
+            rest_lights: lights.clone(),
+            object_motion,
+            light_motion,
+            wave_omega,
+        };
+        let scene = Scene {
             name: raw.name,
             description: raw.description.unwrap_or_default(),
             source: self.src.file.to_path_buf(),
@@ -174,7 +246,83 @@ impl Builder<'_> {
             medium,
             materials,
             objects,
-        })
+            time: 0.0,
+            animation: animation.moves().then(|| Arc::new(animation)),
+        };
+        scene.at_time(time)
+    }
+
+    /// An instant in seconds.
+    fn time(&self, path: &str, t: f32) -> Result<f32, SceneError> {
+        if self.finite(path, t)?.abs() > MAX_TIME_S {
+            return Err(self.err(
+                path,
+                format!("expected a time in seconds within ±{MAX_TIME_S:e}, got {t}"),
+            ));
+        }
+        Ok(t)
+    }
+
+    /// A `"motion"`, its pivot defaulting to `default_pivot`.
+    fn motion(
+        &self,
+        path: &str,
+        m: &raw::RawMotion,
+        default_pivot: Vec3,
+    ) -> Result<Motion, SceneError> {
+        let p = |field: &str| format!("{path}.{field}");
+        let pivot = match m.pivot {
+            Some(v) => self.point(&p("pivot"), v)?,
+            None => default_pivot,
+        };
+        let Some(keys) = &m.keyframes else {
+            if m.velocity.is_none() && m.angular_velocity_deg.is_none() {
+                return Err(self.err(
+                    path,
+                    "expected `velocity`, `angular_velocity_deg` or `keyframes`",
+                ));
+            }
+            return Ok(Motion::Velocity {
+                velocity: self.point(&p("velocity"), m.velocity.unwrap_or_default())?,
+                angular_velocity_deg: self.point(
+                    &p("angular_velocity_deg"),
+                    m.angular_velocity_deg.unwrap_or_default(),
+                )?,
+                pivot,
+            });
+        };
+        if m.velocity.is_some() || m.angular_velocity_deg.is_some() {
+            return Err(self.err(
+                path,
+                "expected either `keyframes` or `velocity`/`angular_velocity_deg`, not both",
+            ));
+        }
+        if keys.is_empty() || keys.len() > MAX_KEYFRAMES {
+            return Err(self.err(
+                p("keyframes"),
+                format!("expected 1..={MAX_KEYFRAMES} keyframes, got {}", keys.len()),
+            ));
+        }
+        let mut out: Vec<Keyframe> = Vec::with_capacity(keys.len());
+        for (k, key) in keys.iter().enumerate() {
+            let kp = |field: &str| format!("{path}.keyframes[{k}].{field}");
+            let time = self.time(&kp("time"), key.time)?;
+            if let Some(prev) = out.last().filter(|prev| time <= prev.time) {
+                return Err(self.err(
+                    kp("time"),
+                    format!(
+                        "expected a time after the previous keyframe's {} s (keyframes in increasing time), got {time}",
+                        prev.time
+                    ),
+                ));
+            }
+            out.push(Keyframe {
+                time,
+                translate: self.point(&kp("translate"), key.translate)?,
+                rotate_deg: self.point(&kp("rotate_deg"), key.rotate_deg)?,
+            });
+        }
+        Ok(Motion::Keyframes { keys: out, pivot })
     }
 
     fn camera(&self, c: &raw::RawCamera) -> Result<Camera, SceneError> {
@@ -317,8 +465,9 @@ impl Builder<'_> {
         o: &raw::RawObject<'_>,
         materials: &mut Vec<NamedMaterial>,
         objects: &mut Vec<Object>,
-    ) -> Result<(), SceneError> {
+    ) -> Result<Vec<f32>, SceneError> {
         let path = format!("objects[{i}].shape");
+        let mut omega = Vec::new();
         let p = |field: &str| format!("{path}.{field}");
         let shape = match RawShape::parse(self.src, o.shape, &path)? {
             RawShape::Sphere(s) => Shape::Sphere {
@@ -330,14 +479,21 @@ impl Builder<'_> {
                 normal: self.direction3(&p("normal"), s.normal)?,
                 size: Vec2::from(self.each(&p("size"), s.size, Self::positive)?),
             },
-            RawShape::Heightfield(s) => Shape::Heightfield(self.heightfield(&path, s)?),
+            RawShape::Heightfield(s) => {
+                let (field, w) = self.heightfield(&path, s)?;
+                omega = w;
+                Shape::Heightfield(field)
+            }
             RawShape::Cylinder(s) => Shape::Cylinder {
                 center: self.point(&p("center"), s.center)?,
                 axis: self.direction3(&p("axis"), s.axis)?,
                 radius: self.positive(&p("radius"), s.radius)?,
                 height: self.positive(&p("height"), s.height)?,
             },
-            RawShape::Mesh(m) => return self.mesh(i, &path, m, o, materials, objects),
+            RawShape::Mesh(m) => {
+                self.mesh(i, &path, m, o, materials, objects)?;
+                return Ok(omega);
+            }
         };
         let b = shape.bounds();
         let reach = b.min.abs().max(b.max.abs()).max_element();
@@ -351,7 +507,7 @@ impl Builder<'_> {
         }
         let material = self.material_ref(i, o, materials)?;
         objects.push(Object { shape, material });
-        Ok(())
+        Ok(omega)
     }
 
     /// The index of the material an object names.
@@ -387,7 +543,12 @@ impl Builder<'_> {
             })
     }
 
-    fn heightfield(&self, path: &str, s: raw::RawHeightfield) -> Result<Heightfield, SceneError> {
+    /// The heightfield and each wave's angular frequency (rad/s).
+    fn heightfield(
+        &self,
+        path: &str,
+        s: raw::RawHeightfield,
+    ) -> Result<(Heightfield, Vec<f32>), SceneError> {
         let p = |field: &str| format!("{path}.{field}");
         let center = self.point(&p("center"), s.center)?;
         let size = Vec2::from(self.each(&p("size"), s.size, Self::positive)?);
@@ -400,21 +561,39 @@ impl Builder<'_> {
             }
         }
         let mut waves = Vec::with_capacity(s.waves.len());
+        let mut omega = Vec::with_capacity(s.waves.len());
         for (k, w) in s.waves.iter().enumerate() {
             let wp = |field: &str| format!("{path}.waves[{k}].{field}");
-            waves.push(Wave {
+            let wave = Wave {
                 amplitude: self.non_negative(&wp("amplitude"), w.amplitude)?,
                 wavelength: self.positive(&wp("wavelength"), w.wavelength)?,
                 direction: self.direction2(&wp("direction"), w.direction)?,
                 phase: self.finite(&wp("phase"), w.phase)?,
-            });
+            };
+            let speed = match w.speed_m_s {
+                None => None,
+                Some(c) if c.is_finite() && c.abs() <= MAX_WAVE_SPEED_M_S => Some(c),
+                Some(c) => {
+                    return Err(self.err(
+                        wp("speed_m_s"),
+                        format!(
+                            "expected a phase speed in m/s within ±{MAX_WAVE_SPEED_M_S}, got {c}"
+                        ),
+                    ));
+                }
+            };
+            omega.push(wave_angular_frequency(&wave, speed));
+            waves.push(wave);
         }
-        Ok(Heightfield {
-            center,
-            size,
-            resolution: s.resolution,
-            waves,
-        })
+        Ok((
+            Heightfield {
+                center,
+                size,
+                resolution: s.resolution,
+                waves,
+            },
+            omega,
+        ))
     }
 
     fn mesh(
