@@ -7,7 +7,7 @@ most of its paths are cheap direct-light paths, while every path of ours is a ca
 path. What a user needs is the time to a caustic image of a given noise, so for each
 scene this measures, in one run:
 
-- ours: `caustics reference --time T --batches B` (its own B-batch standard-error
+- ours: `caustics reference --seconds T --batches B` (its own B-batch standard-error
   image), its wall time as printed;
 - Mitsuba: the same scene converted to Mitsuba's format (sensor, lights, materials;
   spheres, quads and open cylinders as its own shapes, heightfields as meshes of our
@@ -273,7 +273,7 @@ def caustic_region(caustic):
 
 def ours(binary, scene_file, seconds, batches, direct, outdir):
     cmd = [
-        str(binary), "reference", "--scene", str(scene_file), "--time", f"{seconds:g}",
+        str(binary), "reference", "--scene", str(scene_file), "--seconds", f"{seconds:g}",
         "--batches", str(batches), "--out", str(outdir),
     ]
     if direct:

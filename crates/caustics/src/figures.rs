@@ -915,6 +915,7 @@ mod tests {
             batches: 2,
             commit: "test".into(),
             relative_stderr: 0.0,
+            time_s: None,
         };
         std::fs::write(
             cache.join("meta.json"),

@@ -50,6 +50,7 @@ pub fn error_text(e: &anyhow::Error) -> String {
 }
 
 pub mod adapters_cmd;
+pub mod animate;
 pub mod ceilings_cmd;
 pub mod cli;
 pub mod compare;

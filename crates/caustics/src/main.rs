@@ -127,6 +127,10 @@ fn main() -> ExitCode {
                 print_summary(&dir, &result);
                 ExitCode::SUCCESS
             }
+            RunOutcome::Animated { dir, result } => {
+                print_animation(&dir, &result);
+                ExitCode::SUCCESS
+            }
             RunOutcome::Skipped { reason } => {
                 eprintln!(
                     "skipped: method {} cannot render scene {}: {reason}",
@@ -143,6 +147,46 @@ fn main() -> ExitCode {
             ExitCode::FAILURE
         }
     }
+}
+
+fn print_animation(dir: &std::path::Path, r: &caustics::animate::AnimationResult) {
+    let median = |s: &Option<caustics::stats::Summary>| {
+        s.as_ref()
+            .map_or("-".to_owned(), |s| format!("{:.3}", s.median))
+    };
+    outln!(
+        "{} / {}: {} frames from {} s at {} FPS on {}",
+        r.scene.name,
+        r.method.name,
+        r.frames.len(),
+        r.sequence.start_s,
+        r.sequence.fps,
+        r.machine.adapter
+    );
+    outln!(
+        "  method GPU ms {} (median), frame GPU ms {}, rebuild CPU ms {}",
+        median(&r.timing.method_gpu_ms),
+        median(&r.timing.frame_gpu_ms),
+        median(&r.rebuild_ms)
+    );
+    for f in r.frames.iter().filter(|f| f.errors.is_some()) {
+        if let Some(e) = &f.errors {
+            outln!(
+                "  t = {:.4} s: flux {}, relMSE {:.3e}, HDR-FLIP {}",
+                f.time_s,
+                e.flux_ratio.map_or("-".into(), |v| format!("{v:.3}")),
+                e.rel_mse,
+                e.hdr_flip.map_or("-".into(), |v| format!("{v:.3}"))
+            );
+        }
+    }
+    if let (Some(t), Some(s)) = (r.temporal_rel_rmse, r.still_rel_rmse) {
+        outln!(
+            "  temporal relRMSE {t:.4} against still relRMSE {s:.4} over {} pairs",
+            r.temporal.len()
+        );
+    }
+    outln!("  -> {}", dir.display());
 }
 
 fn print_summary(dir: &std::path::Path, r: &caustics::result::RunResult) {

@@ -22,12 +22,16 @@ pub struct ReferenceArgs {
     #[arg(long, required_unless_present = "bench")]
     pub scene: Option<String>,
     /// Photons to trace (rounded up to whole work units).
-    #[arg(long, conflicts_with = "time")]
+    #[arg(long, conflicts_with = "seconds")]
     pub photons: Option<u64>,
     /// Trace for this many seconds instead (the photon count is recorded, so the image
     /// can be reproduced bit for bit with --photons).
     #[arg(long, value_name = "SECONDS")]
-    pub time: Option<f64>,
+    pub seconds: Option<f64>,
+    /// The instant of an animated scene to render (seconds; default: the file's
+    /// `"time"`); the cache keys the instant, so `caustics run --time` finds it.
+    #[arg(long, value_name = "SECONDS")]
+    pub time: Option<f32>,
     /// Output folder (default: the reference cache, where `caustics run` finds it).
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
@@ -102,11 +106,11 @@ fn options(args: &ReferenceArgs, photons: u64) -> ReferenceOptions {
 }
 
 fn validate(args: &ReferenceArgs) -> Result<()> {
-    match (args.photons, args.time) {
-        (None, None) if !args.bench => bail!("give --photons N or --time SECONDS"),
+    match (args.photons, args.seconds) {
+        (None, None) if !args.bench => bail!("give --photons N or --seconds SECONDS"),
         (Some(0), _) => bail!("--photons: expected a positive integer, got 0"),
         (_, Some(t)) if !(t.is_finite() && t > 0.0) => {
-            bail!("--time: expected a positive number of seconds, got {t}")
+            bail!("--seconds: expected a positive number of seconds, got {t}")
         }
         _ => {}
     }
@@ -128,6 +132,12 @@ pub fn reference(args: &ReferenceArgs) -> Result<()> {
     let name = args.scene.as_deref().context("--scene is required")?;
     let path = caustics_scene::resolve(name)?;
     let scene = Scene::load_with_limits(&path, &args.limits.limits())?;
+    let scene = match args.time {
+        Some(t) => scene
+            .at_time(t)
+            .with_context(|| format!("--time {t}: posing {}", path.display()))?,
+        None => scene,
+    };
     let dir = match &args.out {
         Some(d) => d.clone(),
         None => cache_dir(&args.references, &scene),
@@ -135,10 +145,10 @@ pub fn reference(args: &ReferenceArgs) -> Result<()> {
     let tracer = Reference::new(&scene)?.with_memory_budget(memory_budget_from_env()?);
     let bar = progress_bar(args.photons);
     let tick = |done: u64| bar.set_position(done);
-    let result = match (args.photons, args.time) {
+    let result = match (args.photons, args.seconds) {
         (Some(n), _) => tracer.render(&options(args, n), &tick)?,
         (None, Some(t)) => tracer.render_for(t, &options(args, 0), &tick)?,
-        (None, None) => bail!("give --photons N or --time SECONDS"),
+        (None, None) => bail!("give --photons N or --seconds SECONDS"),
     };
     bar.finish_and_clear();
     write(&dir, &scene, args.seed, args.batches, &result)?;
@@ -216,6 +226,7 @@ fn write(
         batches,
         commit: crate::machine::build().commit,
         relative_stderr: relative_stderr(&r.caustic, &r.caustic_stderr),
+        time_s: scene.is_animated().then_some(scene.time),
     };
     // meta.json last: a folder with one is complete.
     caustics_metrics::atomic_write(&dir.join("meta.json"), &serde_json::to_vec_pretty(&meta)?)?;

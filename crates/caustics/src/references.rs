@@ -46,6 +46,9 @@ pub struct ReferenceMeta {
     /// Mean over caustic pixels (luminance > 0) of the per-pixel standard error
     /// relative to the mean caustic luminance there.
     pub relative_stderr: f64,
+    /// The instant (s) an animated scene was posed at; absent for a still scene.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub time_s: Option<f32>,
 }
 
 /// A reference found on disk.

@@ -681,6 +681,9 @@ fn run_one(e: &Experiment, spec: &RunSpec, args: &ReproduceArgs, out: &Path) -> 
         quick_reference_photons: 0,
         ceilings: args.ceilings.clone(),
         instrumentation_overhead: false,
+        time: None,
+        animate: None,
+        reference_every: None,
     };
     let status = |status: &str, dir: Option<String>, reason: Option<String>| RunStatus {
         index: spec.index,
@@ -698,6 +701,11 @@ fn run_one(e: &Experiment, spec: &RunSpec, args: &ReproduceArgs, out: &Path) -> 
             status("done", Some(rel.display().to_string()), None)
         }
         Ok(RunOutcome::Skipped { reason }) => status("skipped", None, Some(reason)),
+        Ok(RunOutcome::Animated { .. }) => status(
+            "failed",
+            None,
+            Some("an experiment run rendered a sequence; experiments run still instants".into()),
+        ),
         Err(err) => status("failed", None, Some(crate::error_text(&err))),
     }
 }

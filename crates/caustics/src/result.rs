@@ -156,6 +156,10 @@ pub struct SceneInfo {
     pub width: u32,
     /// Image height (pixels).
     pub height: u32,
+    /// The instant (s) an animated scene was posed at (`caustics run --time`); absent
+    /// for a still scene, which is the same at every instant.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub time_s: Option<f32>,
 }
 
 /// The method as run.

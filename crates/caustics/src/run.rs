@@ -85,6 +85,21 @@ pub struct RunOptions {
     /// exists, gives every pass its roofline in result.json.
     #[arg(long, value_name = "DIR", default_value = crate::ceilings_cmd::DEFAULT_ROOT)]
     pub ceilings: PathBuf,
+    /// Render the scene at this instant (seconds; default: the file's `"time"`, else 0).
+    /// Only an animated scene (moving objects or lights, travelling waves) changes.
+    #[arg(long, value_name = "SECONDS", conflicts_with = "animate")]
+    pub time: Option<f32>,
+    /// Render a sequence instead: instants START, START + 1/FPS, … before END, each a
+    /// new scene and a new method (nothing carried from the previous frame), one timed
+    /// frame each after an untimed one; errors against references at every
+    /// `--reference-every`-th instant and the temporal error at the instant after each
+    /// (`animation.json`, `animation.md`).
+    #[arg(long, value_name = "START:END:FPS")]
+    pub animate: Option<String>,
+    /// With `--animate`: frames between scored instants (default: a quarter of the
+    /// sequence, so 4 scored instants).
+    #[arg(long, value_name = "K", requires = "animate")]
+    pub reference_every: Option<u32>,
     /// Also time the frame without instrumentation: after each timed frame, the same
     /// frame again with no timestamp or statistics queries, and result.json's
     /// `instrumentation` compares their CPU wall times (record, submit, wait).
@@ -111,6 +126,13 @@ pub enum RunOutcome {
         dir: PathBuf,
         /// The result document.
         result: Box<RunResult>,
+    },
+    /// An animated sequence (`--animate`) written to this folder.
+    Animated {
+        /// `<out>/<scene>/<method>/animation/`.
+        dir: PathBuf,
+        /// The sequence's document.
+        result: Box<crate::animate::AnimationResult>,
     },
     /// The method declared the scene out of reach; nothing was written.
     Skipped {
@@ -142,7 +164,7 @@ pub fn parse_param_flags(flags: &[String]) -> Result<serde_json::Map<String, ser
 
 /// The parameters a run was given: the typed values, then the `--param` flags (a key
 /// given both ways is an error).
-fn given_params(o: &RunOptions) -> Result<serde_json::Value> {
+pub(crate) fn given_params(o: &RunOptions) -> Result<serde_json::Value> {
     let mut map = o.param_values.clone();
     for (k, v) in parse_param_flags(&o.params)? {
         if map.insert(k.clone(), v).is_some() {
@@ -152,7 +174,7 @@ fn given_params(o: &RunOptions) -> Result<serde_json::Value> {
     Ok(serde_json::Value::Object(map))
 }
 
-fn validate_options(o: &RunOptions) -> Result<()> {
+pub(crate) fn validate_options(o: &RunOptions) -> Result<()> {
     if o.frames == 0 || o.frames > 10_000 {
         bail!(
             "--frames: expected an integer in 1..=10000, got {}",
@@ -185,8 +207,22 @@ fn validate_options(o: &RunOptions) -> Result<()> {
 /// GPU work or any write, so a bad input leaves earlier results untouched.
 pub fn run(o: &RunOptions) -> Result<RunOutcome> {
     validate_options(o)?;
+    let animate = o
+        .animate
+        .as_deref()
+        .map(crate::animate::AnimateSpec::parse)
+        .transpose()?;
     let scene_path = caustics_scene::resolve(&o.scene)?;
     let scene = Scene::load_with_limits(&scene_path, &o.limits.limits())?;
+    if let Some(spec) = animate {
+        return crate::animate::run_animated(o, &spec, scene);
+    }
+    let scene = match o.time {
+        Some(t) => scene
+            .at_time(t)
+            .with_context(|| format!("--time {t}: posing {}", scene_path.display()))?,
+        None => scene,
+    };
     run_scene(o, scene)
 }
 
@@ -428,6 +464,7 @@ pub fn run_scene(o: &RunOptions, scene: Scene) -> Result<RunOutcome> {
             hash: scene.hash_hex(),
             width: w,
             height: h,
+            time_s: scene.is_animated().then_some(scene.time),
         },
         method: MethodRun {
             name: o.method.clone(),
@@ -467,7 +504,7 @@ pub fn run_scene(o: &RunOptions, scene: Scene) -> Result<RunOutcome> {
 }
 
 /// Percentile of the reference's luminance that the default exposure maps to white.
-const EXPOSURE_PERCENTILE: f64 = 0.99;
+pub(crate) const EXPOSURE_PERCENTILE: f64 = 0.99;
 
 /// The error maps of a scored image against its reference: `<stem>.png`, signed
 /// (method − reference luminance, W·m⁻²·sr⁻¹, blue too dark, red too bright) and
@@ -500,16 +537,16 @@ fn write_error_maps(
 }
 
 /// The reference images a run scores against.
-struct LoadedReference {
-    path: PathBuf,
+pub(crate) struct LoadedReference {
+    pub(crate) path: PathBuf,
     /// How `result.json` names it (`ErrorReport::reference`).
-    name: String,
-    source: &'static str,
-    surface: HdrImage,
-    volume: Option<HdrImage>,
+    pub(crate) name: String,
+    pub(crate) source: &'static str,
+    pub(crate) surface: HdrImage,
+    pub(crate) volume: Option<HdrImage>,
 }
 
-fn read_reference_image(p: &Path, scene: &Scene) -> Result<HdrImage> {
+pub(crate) fn read_reference_image(p: &Path, scene: &Scene) -> Result<HdrImage> {
     let img = caustics_metrics::read_exr(p)
         .with_context(|| format!("reading reference {}", p.display()))?;
     let (w, h) = (scene.camera.width, scene.camera.height);
@@ -526,7 +563,11 @@ fn read_reference_image(p: &Path, scene: &Scene) -> Result<HdrImage> {
 }
 
 /// `--reference`, else the cached reference of the scene (said on stderr), else none.
-fn load_reference(o: &RunOptions, scene: &Scene, volume: bool) -> Result<Option<LoadedReference>> {
+pub(crate) fn load_reference(
+    o: &RunOptions,
+    scene: &Scene,
+    volume: bool,
+) -> Result<Option<LoadedReference>> {
     if let Some(p) = &o.reference {
         let surface = read_reference_image(p, scene)?;
         return Ok(Some(LoadedReference {
@@ -604,7 +645,7 @@ fn render_quick_reference(o: &RunOptions, scene: &Scene) -> Result<()> {
 }
 
 /// RMS of `stderr.exr` beside the reference, if present.
-fn reference_noise(reference: &Path) -> Result<Option<f64>> {
+pub(crate) fn reference_noise(reference: &Path) -> Result<Option<f64>> {
     let Some(p) = reference
         .parent()
         .map(|d| d.join("stderr.exr"))
@@ -628,7 +669,11 @@ pub(crate) fn is_method_pass(name: &str, method: &str) -> bool {
 }
 
 /// Per-pass and per-owner time summaries over the measured frames.
-fn timing(frames: &[caustics_gpu::FrameSample], available: bool, method: &str) -> Timing {
+pub(crate) fn timing(
+    frames: &[caustics_gpu::FrameSample],
+    available: bool,
+    method: &str,
+) -> Timing {
     let mut order: Vec<String> = Vec::new();
     let mut per_pass: BTreeMap<String, Vec<f64>> = BTreeMap::new();
     let (mut method_ms, mut base_ms, mut frame_ms, mut wall_ms) = (vec![], vec![], vec![], vec![]);

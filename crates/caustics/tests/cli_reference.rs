@@ -31,9 +31,13 @@ fn bad_reference_options_fail_clearly() {
     let tmp = tempfile::tempdir().expect("tempdir");
     let refs = tmp.path().to_str().expect("utf-8");
     for (args, needle) in [
-        (vec!["--scene", "ring"], "--photons N or --time SECONDS"),
+        (vec!["--scene", "ring"], "--photons N or --seconds SECONDS"),
         (vec!["--scene", "ring", "--photons", "0"], "--photons"),
-        (vec!["--scene", "ring", "--time=-3"], "--time"),
+        (vec!["--scene", "ring", "--seconds=-3"], "--seconds"),
+        (
+            vec!["--scene", "ring", "--photons", "10", "--time", "nan"],
+            "expected a time in seconds",
+        ),
         (
             vec!["--scene", "ring", "--photons", "10", "--batches", "1"],
             "--batches",
@@ -43,7 +47,7 @@ fn bad_reference_options_fail_clearly() {
             "no_such_scene",
         ),
         (
-            vec!["--scene", "ring", "--photons", "10", "--time", "1"],
+            vec!["--scene", "ring", "--photons", "10", "--seconds", "1"],
             "cannot be used with",
         ),
     ] {

@@ -153,6 +153,7 @@ fn a_scored_run_keeps_pixel_averaged_and_1spp_errors_side_by_side() {
     reference(&ReferenceArgs {
         scene: Some(scene.display().to_string()),
         photons: Some(1 << 20),
+        seconds: None,
         time: None,
         out: None,
         references: references.clone(),
@@ -329,6 +330,7 @@ fn a_cached_reference_is_found_by_scene_hash_and_used() {
         batches: 16,
         commit: "test".into(),
         relative_stderr: 0.01,
+        time_s: None,
     };
     std::fs::write(
         dir.join("meta.json"),

@@ -490,6 +490,7 @@ fn a_cached_reference_with_fewer_photons_than_asked_is_rendered_again() {
         batches: 4,
         commit: "test".into(),
         relative_stderr: 0.5,
+        time_s: None,
     };
     std::fs::write(
         dir.join("meta.json"),

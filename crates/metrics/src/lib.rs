@@ -41,6 +41,7 @@ mod heatmap;
 mod image;
 mod io;
 mod ssim;
+mod temporal;
 mod tonemap;
 
 pub use crate::colormap::{COOL_WARM_NEUTRAL, cool_warm, inferno};
@@ -72,4 +73,5 @@ pub use crate::io::{
     write_counts_png, write_exr, write_png,
 };
 pub use crate::ssim::{ssim, ssim_with_range};
+pub use crate::temporal::{TemporalError, temporal_error};
 pub use crate::tonemap::{ToneMap, srgb_oetf};

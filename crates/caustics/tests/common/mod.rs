@@ -48,6 +48,9 @@ pub(crate) fn run_options(scene: &Path, out: &Path, method: &str, params: &[&str
         quick_reference_photons: 0,
         ceilings: out.join("no-ceilings"),
         instrumentation_overhead: false,
+        time: None,
+        animate: None,
+        reference_every: None,
     }
 }
 
@@ -56,5 +59,6 @@ pub(crate) fn run_dir(o: &RunOptions) -> (PathBuf, RunResult) {
     match run(o).unwrap_or_else(|e| panic!("caustics run failed: {e:#}")) {
         RunOutcome::Done { dir, result } => (dir, *result),
         RunOutcome::Skipped { reason } => panic!("unexpectedly skipped: {reason}"),
+        RunOutcome::Animated { dir, .. } => panic!("unexpectedly animated: {}", dir.display()),
     }
 }

@@ -1,0 +1,564 @@
+//! `caustics run --animate START:END:FPS`: a method on a moving scene, frame by frame.
+//!
+//! Every frame is a new instant: the scene is posed ([`Scene::at_time`]), uploaded and
+//! the method created anew, so no method reuses anything of the previous frame (what a
+//! method costs when nothing can be cached). The rebuild (upload, the method's setup,
+//! pipelines included) is timed on the CPU apart from the frame. Each instant gets one
+//! untimed frame, then one timed frame, so the GPU time is the frame's own and not the
+//! first use of new pipelines.
+//!
+//! Every `--reference-every`-th instant is scored like a still run (pixel-averaged
+//! scoring frame against a reference posed at that instant, from the cache or rendered
+//! quickly), and so is the instant after it: the pair gives the temporal error
+//! ([`caustics_metrics::temporal_error`]), the flicker a still error misses.
+//! Writes `animation.json` (atomically) and `animation.md` under
+//! `<out>/<scene>/<method>/animation/`, with the scored instants' caustic images.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use anyhow::{Context, Result, bail};
+use caustics_gpu::{
+    AdapterChoice, FrameMode, GpuContext, GpuScene, PassProfiler, Renderer, RendererOptions,
+};
+use caustics_metrics::{Errors, HdrImage, TemporalError, ToneMap};
+use caustics_scene::{MAX_TIME_S, Scene};
+use serde::{Deserialize, Serialize};
+
+use crate::machine::{self, Build, Machine};
+use crate::registry;
+use crate::result::{MethodRun, SceneInfo, Timing};
+use crate::run::{RunOptions, RunOutcome};
+use crate::stats::{Summary, summarize};
+
+/// Most frames of one sequence.
+pub const MAX_ANIMATION_FRAMES: usize = 10_000;
+
+/// Version of `animation.json`.
+pub const ANIMATION_SCHEMA_VERSION: u32 = 1;
+
+/// `START:END:FPS`: instants START, START + 1/FPS, … before END.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct AnimateSpec {
+    /// First instant (s).
+    pub start_s: f32,
+    /// End of the sequence (s), not included.
+    pub end_s: f32,
+    /// Frames per second.
+    pub fps: f32,
+}
+
+impl AnimateSpec {
+    /// Parses `START:END:FPS` (e.g. `0:2:30`, 60 frames).
+    pub fn parse(text: &str) -> Result<AnimateSpec> {
+        let bad = |why: String| anyhow::anyhow!("--animate {text:?}: {why}");
+        let parts: Vec<&str> = text.split(':').collect();
+        let [start, end, fps] = parts.as_slice() else {
+            return Err(bad("expected START:END:FPS, e.g. 0:2:30".into()));
+        };
+        let num = |name: &str, s: &str| -> Result<f32> {
+            s.trim()
+                .parse::<f32>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| bad(format!("{name}: expected a finite number, got {s:?}")))
+        };
+        let spec = AnimateSpec {
+            start_s: num("START", start)?,
+            end_s: num("END", end)?,
+            fps: num("FPS", fps)?,
+        };
+        if spec.start_s.abs() > MAX_TIME_S || spec.end_s.abs() > MAX_TIME_S {
+            return Err(bad(format!(
+                "expected START and END within ±{MAX_TIME_S:e} s"
+            )));
+        }
+        if spec.end_s <= spec.start_s {
+            return Err(bad("expected END after START".into()));
+        }
+        if !(spec.fps > 0.0 && spec.fps <= 1000.0) {
+            return Err(bad(format!(
+                "FPS: expected a rate in (0, 1000], got {}",
+                spec.fps
+            )));
+        }
+        let n = spec.frame_count();
+        if n == 0 || n > MAX_ANIMATION_FRAMES {
+            return Err(bad(format!(
+                "expected 1..={MAX_ANIMATION_FRAMES} frames, got {n} ((END − START)·FPS)"
+            )));
+        }
+        Ok(spec)
+    }
+
+    /// Number of frames: ⌈(END − START)·FPS⌉ (rounded to the nearest first when within
+    /// 1e-4 of a whole number, so `0:2:30` is 60 frames).
+    pub fn frame_count(&self) -> usize {
+        let exact = f64::from(self.end_s - self.start_s) * f64::from(self.fps);
+        let near = exact.round();
+        let n = if (exact - near).abs() < 1e-4 {
+            near
+        } else {
+            exact.ceil()
+        };
+        n.max(0.0) as usize
+    }
+
+    /// The instants of the frames (s).
+    pub fn instants(&self) -> Vec<f32> {
+        (0..self.frame_count())
+            .map(|i| (f64::from(self.start_s) + i as f64 / f64::from(self.fps)) as f32)
+            .collect()
+    }
+}
+
+/// `animation.json`: one method on one animated scene over a sequence of instants.
+#[derive(Clone, Debug, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct AnimationResult {
+    /// [`ANIMATION_SCHEMA_VERSION`].
+    pub schema_version: u32,
+    /// Source and profile of the binary.
+    pub build: Build,
+    /// Adapter and CPU.
+    pub machine: Machine,
+    /// The scene (its hash and time at the first instant).
+    pub scene: SceneInfo,
+    /// The method and its parameters.
+    pub method: MethodRun,
+    /// The sequence.
+    pub sequence: AnimateSpec,
+    /// Frames between scored instants.
+    pub reference_every: u32,
+    /// N of the N×N sub-pixel grid of the scored instants' scoring frames.
+    pub score_grid: u32,
+    /// Every frame, in time order.
+    pub frames: Vec<AnimationFrame>,
+    /// Per-pass GPU times over the sequence's timed frames (one per instant).
+    pub timing: Timing,
+    /// CPU wall time (ms) of each instant's rebuild (pose, upload, the method's setup).
+    pub rebuild_ms: Option<Summary>,
+    /// The temporal error of each scored pair of consecutive instants.
+    pub temporal: Vec<TemporalPair>,
+    /// Root mean square of the pairs' `temporal_rel_rmse`.
+    pub temporal_rel_rmse: Option<f64>,
+    /// Root mean square of the pairs' `still_rel_rmse` (the same frames, still).
+    pub still_rel_rmse: Option<f64>,
+    /// Wall time of the whole sequence (s).
+    pub wall_s: f64,
+}
+
+/// One frame of a sequence.
+#[derive(Clone, Debug, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct AnimationFrame {
+    /// Index in the sequence.
+    pub index: usize,
+    /// Instant (s).
+    pub time_s: f32,
+    /// Content hash of the scene posed at this instant.
+    pub scene_hash: String,
+    /// GPU time of the method's passes in the timed frame (ms).
+    pub method_gpu_ms: Option<f64>,
+    /// GPU time of the whole timed frame (ms).
+    pub frame_gpu_ms: Option<f64>,
+    /// CPU wall time of this instant's rebuild (ms).
+    pub rebuild_ms: f64,
+    /// The method's counters at this instant.
+    pub counters: std::collections::BTreeMap<String, u64>,
+    /// Surface-caustic errors of the pixel-averaged scoring frame against the reference
+    /// at this instant (scored instants only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub errors: Option<Errors>,
+    /// The reference it was scored against (cache folder).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reference: Option<String>,
+    /// `caustic_t<time>.png` written for this instant.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub image: Option<String>,
+}
+
+/// The temporal error of two consecutive instants.
+#[derive(Clone, Debug, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct TemporalPair {
+    /// First instant (s).
+    pub from_s: f32,
+    /// Second instant (s).
+    pub to_s: f32,
+    /// The errors.
+    pub error: TemporalError,
+}
+
+/// The instants that are scored: every `every`-th, and the one after each (for the
+/// temporal pair) when there is one.
+fn scored_indices(n: usize, every: usize) -> Vec<(usize, bool)> {
+    (0..n)
+        .map(|i| {
+            let first = i % every == 0;
+            let second = i > 0 && (i - 1) % every == 0;
+            (i, first || second)
+        })
+        .collect()
+}
+
+/// A scored instant's images, kept for the temporal pairs.
+struct Scored {
+    surface: HdrImage,
+    reference: HdrImage,
+    stderr: Option<HdrImage>,
+}
+
+/// Runs the sequence (see the module doc).
+pub fn run_animated(o: &RunOptions, spec: &AnimateSpec, scene: Scene) -> Result<RunOutcome> {
+    let started = std::time::Instant::now();
+    crate::run::validate_options(o)?;
+    let instants = spec.instants();
+    let n = instants.len();
+    let every = match o.reference_every {
+        Some(0) => bail!("--reference-every: expected a positive number of frames, got 0"),
+        Some(k) => k as usize,
+        None => (n / 4).max(1),
+    };
+    if !scene.is_animated() {
+        eprintln!(
+            "note: {} does not move (no motion, no travelling waves): every frame is the same instant",
+            scene.name
+        );
+    }
+    let info = registry::find(&o.method)?;
+    let params = crate::run::given_params(o)?;
+    let parsed = (info.parse)(&params)?;
+    // Every instant is posed before any GPU work, so a motion that leaves the coordinate
+    // range fails before anything is written.
+    let posed: Vec<Scene> = instants
+        .iter()
+        .map(|&t| {
+            scene
+                .at_time(t)
+                .with_context(|| format!("--animate: posing {} at {t} s", scene.name))
+        })
+        .collect::<Result<_>>()?;
+    for s in &posed {
+        if let Err(reason) = info.supports(s, &parsed) {
+            return Ok(RunOutcome::Skipped {
+                reason: format!("at {} s: {}", s.time, reason.0),
+            });
+        }
+    }
+    let ctx = GpuContext::new(&AdapterChoice::from_flag_or_env(o.adapter.as_deref()))?;
+    eprintln!(
+        "adapter: {} ({}, {}); {n} instants from {} s at {} FPS, scored every {every}",
+        ctx.summary.name, ctx.summary.backend, ctx.summary.device_type, spec.start_s, spec.fps
+    );
+    let dir = o.out.join(&scene.name).join(&o.method).join("animation");
+    std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+    let (w, h) = (scene.camera.width, scene.camera.height);
+
+    let mut frames = Vec::with_capacity(n);
+    let mut samples = Vec::with_capacity(n);
+    let mut scored: Vec<Option<Scored>> = Vec::with_capacity(n);
+    let mut tone: Option<ToneMap> = None;
+    let bar = indicatif::ProgressBar::new(n as u64);
+    for ((i, is_scored), posed_scene) in scored_indices(n, every).into_iter().zip(posed) {
+        let t = posed_scene.time;
+        let scene_hash = posed_scene.hash_hex();
+        let reference = if is_scored {
+            crate::run::load_reference(o, &posed_scene, false)?
+        } else {
+            None
+        };
+        let rebuild_started = std::time::Instant::now();
+        let gpu_scene = GpuScene::upload(&ctx, Arc::new(posed_scene), Default::default())?;
+        let renderer = Renderer::new(&ctx, gpu_scene, RendererOptions::default())?;
+        let mut method = (info.create)(&ctx, &renderer, &parsed)?;
+        let rebuild_ms = rebuild_started.elapsed().as_secs_f64() * 1e3;
+        let mut profiler = PassProfiler::new(&ctx, 2);
+        for _ in 0..2 {
+            let mut frame = renderer.begin_frame(&mut profiler, FrameMode::Timed)?;
+            method.record(&mut frame)?;
+            frame.submit(&ctx)?;
+        }
+        let sample = profiler
+            .collect(&ctx)?
+            .pop()
+            .context("the timed frame left no sample")?;
+        let one = crate::run::timing(
+            std::slice::from_ref(&sample),
+            profiler.has_timestamps(),
+            &o.method,
+        );
+        samples.push(sample);
+        let counters = method.counters(&ctx)?;
+        let mut frame = AnimationFrame {
+            index: i,
+            time_s: t,
+            scene_hash,
+            method_gpu_ms: one.method_gpu_ms.map(|s| s.median),
+            frame_gpu_ms: one.frame_gpu_ms.map(|s| s.median),
+            rebuild_ms,
+            counters,
+            errors: None,
+            reference: None,
+            image: None,
+        };
+        match reference {
+            Some(r) if is_scored => {
+                let mut accumulator = caustics_gpu::ScoreAccumulator::new(&ctx, &renderer)?;
+                let images = caustics_method::render_scoring_frame(
+                    &ctx,
+                    &renderer,
+                    method.as_mut(),
+                    &mut accumulator,
+                    o.score_grid,
+                    caustics_method::LightSide::Reuse,
+                )?;
+                let surface = HdrImage::from_rgba_f32(w, h, &images.surface)?;
+                surface.check_finite("surface caustic image (scoring frame)")?;
+                // One exposure for the whole sequence: the first scored reference's.
+                let tone = *tone.get_or_insert_with(|| {
+                    o.exposure.map(ToneMap::new).unwrap_or_else(|| {
+                        ToneMap::fit_percentile(&r.surface, crate::run::EXPOSURE_PERCENTILE)
+                    })
+                });
+                frame.errors = Some(caustics_metrics::all_errors(&surface, &r.surface, &tone)?);
+                frame.reference = Some(machine::portable_path(&r.path));
+                let name = format!("caustic_t{t:.3}.png");
+                caustics_metrics::write_png(&dir.join(&name), &tone.apply(&surface))?;
+                frame.image = Some(name);
+                let stderr_path = r.path.with_file_name("stderr.exr");
+                let stderr = stderr_path
+                    .is_file()
+                    .then(|| caustics_metrics::read_exr(&stderr_path))
+                    .transpose()
+                    .with_context(|| format!("reading {}", stderr_path.display()))?;
+                scored.push(Some(Scored {
+                    surface,
+                    reference: r.surface,
+                    stderr,
+                }));
+            }
+            _ => scored.push(None),
+        }
+        frames.push(frame);
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+
+    let mut temporal = Vec::new();
+    for i in 0..n.saturating_sub(1) {
+        if i % every != 0 {
+            continue;
+        }
+        if let (Some(a), Some(b)) = (&scored[i], &scored[i + 1]) {
+            let stderr = a.stderr.as_ref().zip(b.stderr.as_ref());
+            temporal.push(TemporalPair {
+                from_s: instants[i],
+                to_s: instants[i + 1],
+                error: caustics_metrics::temporal_error(
+                    &a.surface,
+                    &b.surface,
+                    &a.reference,
+                    &b.reference,
+                    stderr,
+                )?,
+            });
+        }
+    }
+    let rms = |f: &dyn Fn(&TemporalPair) -> f64| -> Option<f64> {
+        (!temporal.is_empty()).then(|| {
+            (temporal.iter().map(|p| f(p).powi(2)).sum::<f64>() / temporal.len() as f64).sqrt()
+        })
+    };
+    let rebuild: Vec<f64> = frames.iter().map(|f| f.rebuild_ms).collect();
+    let has_timestamps = samples
+        .iter()
+        .any(|s| s.passes.iter().any(|p| p.gpu_ms.is_some()));
+    let result = AnimationResult {
+        schema_version: ANIMATION_SCHEMA_VERSION,
+        build: machine::build(),
+        machine: machine::machine(&ctx.summary),
+        scene: SceneInfo {
+            name: scene.name.clone(),
+            file: machine::portable_path(&scene.source),
+            hash: frames
+                .first()
+                .map(|f| f.scene_hash.clone())
+                .unwrap_or_default(),
+            width: w,
+            height: h,
+            time_s: Some(spec.start_s),
+        },
+        method: MethodRun {
+            name: o.method.clone(),
+            params,
+        },
+        sequence: *spec,
+        reference_every: every as u32,
+        score_grid: o.score_grid,
+        timing: crate::run::timing(&samples, has_timestamps, &o.method),
+        rebuild_ms: summarize(&rebuild),
+        temporal_rel_rmse: rms(&|p| p.error.temporal_rel_rmse),
+        still_rel_rmse: rms(&|p| p.error.still_rel_rmse),
+        temporal,
+        frames,
+        wall_s: started.elapsed().as_secs_f64(),
+    };
+    caustics_metrics::atomic_write(
+        &dir.join("animation.json"),
+        &serde_json::to_vec_pretty(&result)?,
+    )?;
+    caustics_metrics::atomic_write(&dir.join("animation.md"), markdown(&result).as_bytes())?;
+    Ok(RunOutcome::Animated {
+        dir,
+        result: Box::new(result),
+    })
+}
+
+fn opt(v: Option<f64>, digits: usize) -> String {
+    v.map_or("–".into(), |v| format!("{v:.digits$}"))
+}
+
+/// `animation.md`: the sequence's timings, the scored instants and the temporal pairs.
+pub fn markdown(r: &AnimationResult) -> String {
+    let mut s = String::new();
+    let ms = |x: &Option<Summary>| {
+        x.as_ref().map_or("–".into(), |s| {
+            format!("{:.3} (p10 {:.3}, p90 {:.3})", s.median, s.p10, s.p90)
+        })
+    };
+    let _ = writeln!(
+        s,
+        "# {} / {}: {} frames, {}–{} s at {} FPS\n",
+        r.scene.name,
+        r.method.name,
+        r.frames.len(),
+        r.sequence.start_s,
+        r.sequence.end_s,
+        r.sequence.fps
+    );
+    let _ = writeln!(
+        s,
+        "{} ({}), {} build {}{}. Every frame is a new instant: the scene posed, uploaded and the method created anew (its rebuild timed on the CPU), one untimed frame, then the timed one. Scored every {} frames and the frame after (scoring grid {}×{}).\n",
+        r.machine.adapter,
+        r.machine.backend,
+        r.build.profile,
+        r.build.commit,
+        if r.build.dirty { "+dirty" } else { "" },
+        r.reference_every,
+        r.score_grid,
+        r.score_grid
+    );
+    let _ = writeln!(s, "| | median (p10, p90) |\n|---|---|");
+    let _ = writeln!(s, "| method GPU ms | {} |", ms(&r.timing.method_gpu_ms));
+    let _ = writeln!(s, "| frame GPU ms | {} |", ms(&r.timing.frame_gpu_ms));
+    let _ = writeln!(s, "| rebuild CPU ms | {} |", ms(&r.rebuild_ms));
+    let _ = writeln!(
+        s,
+        "| temporal relRMSE (RMS over pairs) | {} |",
+        opt(r.temporal_rel_rmse, 4)
+    );
+    let _ = writeln!(
+        s,
+        "| still relRMSE of the same frames | {} |\n",
+        opt(r.still_rel_rmse, 4)
+    );
+    if !r.temporal.is_empty() {
+        let _ = writeln!(
+            s,
+            "## Temporal pairs\n\n| from s | to s | temporal relRMSE | still relRMSE | change ratio |\n|---|---|---|---|---|"
+        );
+        for p in &r.temporal {
+            let _ = writeln!(
+                s,
+                "| {:.4} | {:.4} | {:.4} | {:.4} | {} |",
+                p.from_s,
+                p.to_s,
+                p.error.temporal_rel_rmse,
+                p.error.still_rel_rmse,
+                opt(p.error.change_ratio, 3)
+            );
+        }
+        let _ = writeln!(s);
+    }
+    let _ = writeln!(
+        s,
+        "## Frames\n\n| # | t s | method GPU ms | frame GPU ms | rebuild ms | flux | relMSE | HDR-FLIP |\n|---|---|---|---|---|---|---|---|"
+    );
+    for f in &r.frames {
+        let e = f.errors.as_ref();
+        let _ = writeln!(
+            s,
+            "| {} | {:.4} | {} | {} | {:.1} | {} | {} | {} |",
+            f.index,
+            f.time_s,
+            opt(f.method_gpu_ms, 3),
+            opt(f.frame_gpu_ms, 3),
+            f.rebuild_ms,
+            opt(e.and_then(|e| e.flux_ratio), 3),
+            e.map_or("–".into(), |e| format!("{:.3e}", e.rel_mse)),
+            opt(e.and_then(|e| e.hdr_flip), 3),
+        );
+    }
+    s
+}
+
+/// Reads an `animation.json`.
+pub fn load(path: &Path) -> Result<AnimationResult> {
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    let de = &mut serde_json::Deserializer::from_str(&text);
+    serde_path_to_error::deserialize(de)
+        .map_err(|e| anyhow::anyhow!("{}: {}: {}", path.display(), e.path(), e.inner()))
+}
+
+/// The folder a sequence writes to.
+pub fn animation_dir(out: &Path, scene: &str, method: &str) -> PathBuf {
+    out.join(scene).join(method).join("animation")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn specs_parse_and_count_their_frames() {
+        let s = AnimateSpec::parse("0:2:30").expect("valid");
+        assert_eq!(s.frame_count(), 60);
+        let t = s.instants();
+        assert_eq!(t.len(), 60);
+        assert!((t[59] - 59.0 / 30.0).abs() < 1e-6);
+        assert_eq!(
+            AnimateSpec::parse("0.5:0.6:25")
+                .expect("valid")
+                .frame_count(),
+            3
+        );
+        for (bad, says) in [
+            ("0:2", "START:END:FPS"),
+            ("0:x:30", "END: expected a finite number"),
+            ("2:1:30", "END after START"),
+            ("0:1:0", "FPS: expected a rate"),
+            ("0:1000:1000", "1..=10000 frames"),
+            ("0:1e9:1", "within"),
+        ] {
+            let err = AnimateSpec::parse(bad).expect_err(bad).to_string();
+            assert!(
+                err.contains(says) && err.contains("--animate"),
+                "{bad}: {err}"
+            );
+        }
+    }
+
+    #[test]
+    fn scored_instants_come_in_pairs() {
+        let s: Vec<usize> = scored_indices(10, 4)
+            .into_iter()
+            .filter(|(_, scored)| *scored)
+            .map(|(i, _)| i)
+            .collect();
+        assert_eq!(s, [0, 1, 4, 5, 8, 9]);
+        assert!(scored_indices(3, 1).iter().all(|(_, s)| *s));
+    }
+}
