@@ -513,6 +513,100 @@ pub fn load(path: &Path) -> Result<AnimationResult> {
         .map_err(|e| anyhow::anyhow!("{}: {}: {}", path.display(), e.path(), e.inner()))
 }
 
+/// Every `animation.json` under `dir` (any depth), sorted by scene, method, parameters.
+pub fn find_all(dir: &Path) -> Result<Vec<AnimationResult>> {
+    fn walk(dir: &Path, out: &mut Vec<PathBuf>) -> Result<()> {
+        let entries =
+            std::fs::read_dir(dir).with_context(|| format!("reading {}", dir.display()))?;
+        for entry in entries {
+            let path = entry?.path();
+            if path.is_dir() {
+                walk(&path, out)?;
+            } else if path.file_name().is_some_and(|n| n == "animation.json") {
+                out.push(path);
+            }
+        }
+        Ok(())
+    }
+    let mut files = Vec::new();
+    walk(dir, &mut files)?;
+    let mut all = files.iter().map(|f| load(f)).collect::<Result<Vec<_>>>()?;
+    all.sort_by_key(|r| {
+        (
+            r.scene.name.clone(),
+            r.method.name.clone(),
+            r.method.params.to_string(),
+        )
+    });
+    Ok(all)
+}
+
+/// Sequences side by side: one row per sequence.
+pub fn side_by_side(all: &[AnimationResult]) -> String {
+    let mut s = String::new();
+    let median = |x: &Option<Summary>| {
+        x.as_ref()
+            .map_or("–".into(), |s| format!("{:.2} ({:.2}–{:.2})", s.median, s.p10, s.p90))
+    };
+    let mean = |v: Vec<f64>| (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64);
+    let _ = writeln!(
+        s,
+        "# Animated sequences side by side\n\nEvery frame a new instant (scene posed, uploaded, method created anew; its rebuild on the CPU apart); GPU times are medians (p10–p90) of the timed frames, one per instant. Errors: means over the scored instants (pixel-averaged scoring frames against references at those instants). Temporal relRMSE: the method's frame-to-frame change against the reference's, RMS over the scored pairs, beside the same frames' still relRMSE; change ratio: Σ Δm² / Σ Δr² (1 = the method's image changes as much as the caustic's).\n"
+    );
+    let _ = writeln!(
+        s,
+        "| scene | method | parameters | frames | adapter | method GPU ms | frame GPU ms | rebuild CPU ms | flux | relMSE | HDR-FLIP | temporal relRMSE | still relRMSE | change ratio |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+    );
+    for r in all {
+        let scored: Vec<&Errors> = r.frames.iter().filter_map(|f| f.errors.as_ref()).collect();
+        let params = match &r.method.params {
+            serde_json::Value::Object(m) if m.is_empty() => "defaults".to_owned(),
+            p => p.to_string(),
+        };
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {} ({}–{} s, {} FPS) | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+            r.scene.name,
+            r.method.name,
+            params,
+            r.frames.len(),
+            r.sequence.start_s,
+            r.sequence.end_s,
+            r.sequence.fps,
+            r.machine.adapter,
+            median(&r.timing.method_gpu_ms),
+            median(&r.timing.frame_gpu_ms),
+            median(&r.rebuild_ms),
+            opt(mean(scored.iter().filter_map(|e| e.flux_ratio).collect()), 3),
+            mean(scored.iter().map(|e| e.rel_mse).collect())
+                .map_or("–".into(), |v| format!("{v:.3e}")),
+            opt(mean(scored.iter().filter_map(|e| e.hdr_flip).collect()), 3),
+            opt(r.temporal_rel_rmse, 4),
+            opt(r.still_rel_rmse, 4),
+            opt(
+                mean(r.temporal.iter().filter_map(|p| p.error.change_ratio).collect()),
+                3
+            ),
+        );
+    }
+    s
+}
+
+/// Writes `<dir>/animations.md` from every sequence under `dir`; returns its path.
+pub fn side_by_side_file(dir: &Path) -> Result<PathBuf> {
+    let all = find_all(dir)?;
+    if all.is_empty() {
+        bail!(
+            "{}: no animation.json below (run `caustics run --animate START:END:FPS --out {}` first)",
+            dir.display(),
+            dir.display()
+        );
+    }
+    let path = dir.join("animations.md");
+    caustics_metrics::atomic_write(&path, side_by_side(&all).as_bytes())?;
+    Ok(path)
+}
+
 /// The folder a sequence writes to.
 pub fn animation_dir(out: &Path, scene: &str, method: &str) -> PathBuf {
     out.join(scene).join(method).join("animation")

@@ -36,6 +36,13 @@ pub enum Command {
     /// Run an experiment of bench/experiments (or `all`): every (scene, method,
     /// parameter set) it names, then a summary (tables, plots, Bencher Metric Format).
     Reproduce(ReproduceArgs),
+    /// Put the sequences of `run --animate` under a folder side by side:
+    /// `<DIR>/animations.md` (per method: GPU and rebuild time, errors at the scored
+    /// instants, temporal error).
+    Animations {
+        /// Folder holding `<scene>/<method>/animation/animation.json` files.
+        dir: std::path::PathBuf,
+    },
     /// Merge the output folders of `reproduce --shard k/n` into one.
     Merge(MergeArgs),
     /// Compare two result folders run by run; exit 2 on a regression, 3 when no pair

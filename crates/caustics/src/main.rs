@@ -118,6 +118,10 @@ fn main() -> ExitCode {
             out!("{}", caustics::schemas::schema_text(kind));
             Ok(ExitCode::SUCCESS)
         }
+        Command::Animations { dir } => caustics::animate::side_by_side_file(&dir).map(|path| {
+            outln!("animations: {}", path.display());
+            ExitCode::SUCCESS
+        }),
         Command::Report(args) => caustics::report::report(&args).map(|index| {
             outln!("report: {}", index.display());
             ExitCode::SUCCESS
