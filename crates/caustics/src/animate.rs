@@ -545,8 +545,9 @@ pub fn find_all(dir: &Path) -> Result<Vec<AnimationResult>> {
 pub fn side_by_side(all: &[AnimationResult]) -> String {
     let mut s = String::new();
     let median = |x: &Option<Summary>| {
-        x.as_ref()
-            .map_or("–".into(), |s| format!("{:.2} ({:.2}–{:.2})", s.median, s.p10, s.p90))
+        x.as_ref().map_or("–".into(), |s| {
+            format!("{:.2} ({:.2}–{:.2})", s.median, s.p10, s.p90)
+        })
     };
     let mean = |v: Vec<f64>| (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64);
     let _ = writeln!(
@@ -577,14 +578,22 @@ pub fn side_by_side(all: &[AnimationResult]) -> String {
             median(&r.timing.method_gpu_ms),
             median(&r.timing.frame_gpu_ms),
             median(&r.rebuild_ms),
-            opt(mean(scored.iter().filter_map(|e| e.flux_ratio).collect()), 3),
+            opt(
+                mean(scored.iter().filter_map(|e| e.flux_ratio).collect()),
+                3
+            ),
             mean(scored.iter().map(|e| e.rel_mse).collect())
                 .map_or("–".into(), |v| format!("{v:.3e}")),
             opt(mean(scored.iter().filter_map(|e| e.hdr_flip).collect()), 3),
             opt(r.temporal_rel_rmse, 4),
             opt(r.still_rel_rmse, 4),
             opt(
-                mean(r.temporal.iter().filter_map(|p| p.error.change_ratio).collect()),
+                mean(
+                    r.temporal
+                        .iter()
+                        .filter_map(|p| p.error.change_ratio)
+                        .collect()
+                ),
                 3
             ),
         );
