@@ -233,6 +233,16 @@ impl BeamUniforms {
                 position.extend(0.0).to_array(),
                 intensity.extend(0.0),
             ),
+            // Declined by the capability check and refused by GpuScene::upload: no
+            // power, so nothing could ever be drawn from them.
+            Light::Sphere { position, .. } => (
+                Vec3::ZERO.extend(1.0),
+                position.extend(0.0).to_array(),
+                Vec3::ZERO.extend(0.0),
+            ),
+            Light::Environment { .. } => {
+                (Vec3::NEG_Y.extend(0.0), [0.0; 4], Vec3::ZERO.extend(0.0))
+            }
         };
         let (sigma_t, sigma_s_g) = match &scene.medium {
             Some(m) => (

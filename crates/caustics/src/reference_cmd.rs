@@ -205,6 +205,11 @@ fn write(
     };
     exr("caustic.exr", &r.caustic)?;
     exr("stderr.exr", &r.caustic_stderr)?;
+    // A look at it without an EXR viewer: the caustic with its 99th-percentile
+    // luminance at white, as `caustics run` tone-maps against a reference.
+    let caustic = to_hdr(&r.caustic);
+    let tone = caustics_metrics::ToneMap::fit_percentile(&caustic, crate::run::EXPOSURE_PERCENTILE);
+    caustics_metrics::write_png(&dir.join("caustic.png"), &tone.apply(&caustic))?;
     if let (Some(v), Some(e)) = (&r.volume, &r.volume_stderr) {
         exr("volume.exr", v)?;
         exr("volume_stderr.exr", e)?;

@@ -141,7 +141,17 @@ impl LightView {
                     tan_half_fov: (fov * 0.5).tan(),
                 }
             }
-            Light::Point { position, .. } => {
+            // GpuScene::upload refuses extended lights; their arms keep the match
+            // total: a sphere light seen from its centre, an environment from above.
+            Light::Environment { .. } => Self::fit(
+                &Light::Directional {
+                    direction: Vec3::NEG_Y,
+                    irradiance: Vec3::ZERO,
+                },
+                bounds,
+                resolution,
+            ),
+            Light::Point { position, .. } | Light::Sphere { position, .. } => {
                 let far = far_from(position);
                 let near = (far * 1e-4).max(1e-4);
                 let proj = Mat4::perspective_rh(std::f32::consts::FRAC_PI_2, 1.0, near, far);
@@ -209,7 +219,10 @@ impl LightView {
                 let proj = Mat4::orthographic_rh(-r, r, -r, r, 0.0, back + 2.0 * r);
                 single(LightProjection::Orthographic, view, proj, 0.0, center)
             }
-            Light::Point { position, .. } | Light::Spot { position, .. } => {
+            Light::Environment { .. } => Self::fit(light, scene_bounds, resolution),
+            Light::Point { position, .. }
+            | Light::Spot { position, .. }
+            | Light::Sphere { position, .. } => {
                 let to = center - position;
                 let dist = to.length();
                 if dist > r * 1.01 && (r / dist).asin() < 80f32.to_radians() {
@@ -273,7 +286,10 @@ impl LightView {
                     tan_half_fov: 0.0,
                 })
             }
-            Light::Point { position, .. } | Light::Spot { position, .. } => {
+            Light::Environment { .. } => None,
+            Light::Point { position, .. }
+            | Light::Spot { position, .. }
+            | Light::Sphere { position, .. } => {
                 let centroid = points.iter().fold(Vec3::ZERO, |a, p| a + *p) / points.len() as f32;
                 let axis = (centroid - position).try_normalize()?;
                 let up = any_up(axis);

@@ -283,6 +283,26 @@ pub fn gpu_light(l: &Light) -> GpuLight {
             power: intensity.extend(0.0).to_array(),
             ..Default::default()
         },
+        // GpuScene::upload refuses extended lights (the methods decline them); their
+        // far-field stand-ins keep this total: a sphere light is a point light of
+        // intensity π r² L, an environment a black directional light.
+        Light::Sphere {
+            position,
+            radius,
+            radiance,
+        } => GpuLight {
+            kind: light_kind::POINT,
+            position: position.extend(1.0).to_array(),
+            power: (*radiance * (std::f32::consts::PI * radius * radius))
+                .extend(0.0)
+                .to_array(),
+            ..Default::default()
+        },
+        Light::Environment { .. } => GpuLight {
+            kind: light_kind::DIRECTIONAL,
+            direction: [0.0, -1.0, 0.0, 0.0],
+            ..Default::default()
+        },
     }
 }
 
@@ -293,6 +313,20 @@ impl GpuScene {
         scene: Arc<Scene>,
         tessellation: Tessellation,
     ) -> Result<Self, GpuError> {
+        if let Some((i, l)) = scene
+            .lights
+            .iter()
+            .enumerate()
+            .find(|(_, l)| l.is_extended())
+        {
+            return Err(GpuError::Upload {
+                scene: scene.source.clone(),
+                message: format!(
+                    "lights[{i}] is a {} light: the GPU methods render point, spot and directional lights (the reference renders extended lights)",
+                    l.kind()
+                ),
+            });
+        }
         let device = &ctx.device;
         let mut vertices: Vec<SceneVertex> = Vec::new();
         let mut indices: Vec<u32> = Vec::new();

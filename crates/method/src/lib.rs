@@ -88,6 +88,12 @@ impl Capabilities {
                 Light::Directional { .. } => (self.directional_light, "directional"),
                 Light::Point { .. } => (self.point_light, "point"),
                 Light::Spot { .. } => (self.spot_light, "spot"),
+                Light::Sphere { .. } | Light::Environment { .. } => {
+                    return Err(Unsupported(format!(
+                        "lights[{i}] is a {} light: no GPU method here renders extended lights yet (the reference does; Wand & Straßer's environment-map caustics, their Fig. 6, are issue 16's next step)",
+                        l.kind()
+                    )));
+                }
             };
             if !ok {
                 return Err(Unsupported(format!(
@@ -414,6 +420,25 @@ mod tests {
         name: "beams_level_N",
         doc: "beams per level",
     };
+
+    #[test]
+    fn extended_lights_are_declined_with_the_reason() {
+        let json = r#"{"name": "s", "camera": {"eye": [0, 3, 5], "target": [0, 0, 0], "fov_y_deg": 40, "width": 8, "height": 6},
+            "lights": [{"type": "point", "position": [0, 5, 0], "intensity": [1, 1, 1]},
+                       {"type": "sphere", "position": [1, 5, 0], "radius": 0.2, "radiance": [1, 1, 1]}],
+            "materials": {"floor": {"type": "diffuse", "albedo": [0.8, 0.8, 0.8]}},
+            "objects": [{"shape": {"type": "quad", "center": [0, 0, 0], "normal": [0, 1, 0], "size": [4, 4]}, "material": "floor"}]}"#;
+        let scene = Scene::from_json_str(json, std::path::Path::new("s.json")).expect("valid");
+        let every_kind = Capabilities {
+            surface: true,
+            directional_light: true,
+            point_light: true,
+            spot_light: true,
+            ..Default::default()
+        };
+        let why = every_kind.check(&scene).expect_err("a sphere light").0;
+        assert!(why.contains("lights[1] is a sphere light"), "{why}");
+    }
 
     #[test]
     fn check_finds_undocumented_and_stale_counters() {

@@ -360,6 +360,15 @@ impl LightDisc {
                     radiance_per_power: 1.0 / (std::f32::consts::PI * radius * radius),
                 }
             }
+            // Declined by the capability check (the light map of an extended light is
+            // not built yet): a black disc.
+            Light::Sphere { .. } | Light::Environment { .. } => Self {
+                center,
+                axis: Vec3::Y,
+                radius: 0.0,
+                alpha,
+                radiance_per_power: 0.0,
+            },
         }
     }
 }

@@ -17,12 +17,25 @@
 //! The direct image (`Target::Scene`) emits over the whole scene instead: the disc of
 //! the scene's bounding sphere, or all directions (a spot: its cone).
 //!
+//! - **sphere** area light of radiance L and radius r: a point x uniform on its surface
+//!   (pdf 1/A, A = 4πr²), then a direction uniform in the union of the cones from x
+//!   towards the specular objects (as for a point light, aimed from x), weight
+//!   L·cos θ·A·Ω(x)/(cones holding ω), 0 for directions into the sphere;
+//! - **environment** light of radiance L(ω): a direction towards the sky drawn by
+//!   importance, pixel ∝ luminance·sin θ of the lat-long map, uniform inside the pixel
+//!   (solid-angle pdf p_pixel/(2π²·sin θ·Δu·Δv)); then, as for a directional light
+//!   along −ω, a point on the union of discs ⟂ ω around the specular objects, weight
+//!   L(ω)·Σ areas/(discs holding x)/pdf(ω) (the disc of the scene's bounding sphere
+//!   for the direct image).
+//!
 //! Several lights: one is picked per photon with probability ∝ its total sampled
-//! power, and the weight is divided by that probability.
+//! power, and the weight is divided by that probability. The extended lights draw the
+//! numbers they need beyond four from the photon's stream (`more`), after the four the
+//! other lights use, so adding them changed no other light's photons.
 
 use std::f32::consts::{PI, TAU};
 
-use caustics_scene::{Aabb, Light, Scene, Shape, Vec3, perpendicular_frame};
+use caustics_scene::{Aabb, EnvironmentMap, Light, Scene, Shape, Vec3, perpendicular_frame};
 
 /// What emission aims at.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -82,6 +95,95 @@ enum Sampler {
         /// Cumulative solid angles.
         cdf: Vec<f32>,
     },
+    Sphere {
+        position: Vec3,
+        radius: f32,
+        radiance: Vec3,
+        /// Bounding spheres (and boxes) the photons are aimed at.
+        targets: Vec<(Vec3, f32, Aabb)>,
+    },
+    Environment(Box<EnvironmentSampler>),
+}
+
+/// Importance sampling of a lat-long map (pixel ∝ luminance·sin θ) and the discs the
+/// photons cross, as for a directional light.
+#[derive(Clone, Debug)]
+struct EnvironmentSampler {
+    map: std::sync::Arc<EnvironmentMap>,
+    scale: Vec3,
+    /// Cumulative row weights (length = height).
+    rows: Vec<f64>,
+    /// Per row, cumulative pixel weights (width × height, row-major).
+    cols: Vec<f64>,
+    /// Σ weights.
+    total: f64,
+    /// Bounding spheres the photons are aimed at.
+    targets: Vec<(Vec3, f32, Aabb)>,
+    /// The scene's bounds, for the photons' start plane.
+    bounds: Aabb,
+}
+
+impl EnvironmentSampler {
+    fn new(
+        map: std::sync::Arc<EnvironmentMap>,
+        scale: Vec3,
+        targets: Vec<(Vec3, f32, Aabb)>,
+        bounds: Aabb,
+    ) -> EnvironmentSampler {
+        let (w, h) = (map.width as usize, map.height as usize);
+        let mut cols = Vec::with_capacity(w * h);
+        let mut rows = Vec::with_capacity(h);
+        let mut total = 0.0f64;
+        for y in 0..h {
+            let sin_theta = (std::f64::consts::PI * (y as f64 + 0.5) / h as f64).sin();
+            let mut acc = 0.0f64;
+            for x in 0..w {
+                let l = (map.pixels[y * w + x] * scale).element_sum() as f64 / 3.0;
+                acc += l.max(0.0) * sin_theta;
+                cols.push(acc);
+            }
+            total += acc;
+            rows.push(total);
+        }
+        EnvironmentSampler {
+            map,
+            scale,
+            rows,
+            cols,
+            total,
+            targets,
+            bounds,
+        }
+    }
+
+    /// Draws a direction towards the sky: (ω, solid-angle pdf), or None for a black map.
+    fn direction(&self, u1: f32, u2: f32, du: f32, dv: f32) -> Option<(Vec3, usize, f32)> {
+        if self.total <= 0.0 {
+            return None;
+        }
+        let (w, h) = (self.map.width as usize, self.map.height as usize);
+        let target = f64::from(u1) * self.total;
+        let y = self.rows.partition_point(|&c| c <= target).min(h - 1);
+        let row = &self.cols[y * w..(y + 1) * w];
+        let row_total = row[w - 1];
+        if row_total <= 0.0 {
+            return None;
+        }
+        let x = row
+            .partition_point(|&c| c <= f64::from(u2) * row_total)
+            .min(w - 1);
+        let prev = if x == 0 { 0.0 } else { row[x - 1] };
+        let p_pixel = (row[x] - prev) / self.total;
+        let (u, v) = ((x as f32 + du) / w as f32, (y as f32 + dv) / h as f32);
+        let dir = EnvironmentMap::direction(u, v);
+        let sin_theta = (std::f32::consts::PI * v).sin();
+        if p_pixel <= 0.0 || sin_theta <= 0.0 {
+            return None;
+        }
+        // (u, v) ↦ ω has dΩ = 2π²·sin θ du dv; the pixel spans 1/w × 1/h of (u, v).
+        let pdf = p_pixel as f32 * (w * h) as f32 / (2.0 * PI * PI * sin_theta);
+        Some((dir, y * w + x, pdf))
+    }
 }
 
 /// The emitters of a scene for one [`Target`].
@@ -152,20 +254,9 @@ impl Emitter {
                     let (b1, b2) = perpendicular_frame(dir);
                     let discs: Vec<Disc> = spheres
                         .iter()
-                        .map(|(c, r, b)| {
-                            let center = *c - c.dot(dir) * dir;
-                            let by_corners = b
-                                .corners()
-                                .iter()
-                                .map(|k| {
-                                    let v = *k - *c;
-                                    (v - v.dot(dir) * dir).length()
-                                })
-                                .fold(0.0f32, f32::max);
-                            Disc {
-                                center,
-                                radius: r.min(by_corners) * 1.000_01 + 1e-6,
-                            }
+                        .map(|(c, r, b)| Disc {
+                            center: *c - c.dot(dir) * dir,
+                            radius: disc_radius(dir, *c, *r, b),
                         })
                         .collect();
                     let cdf = cumulative(discs.iter().map(|d| PI * d.radius * d.radius));
@@ -226,6 +317,39 @@ impl Emitter {
                         w,
                     )
                 }
+                Light::Sphere {
+                    position,
+                    radius,
+                    radiance,
+                } => {
+                    let targets = spheres.clone();
+                    let from_centre: f32 = targets
+                        .iter()
+                        .map(|(c, r, b)| aim_cone(*position, *c, *r, b).solid_angle())
+                        .sum();
+                    // ≈ L·πr²·Ω: the flux towards the targets (only the choice of light
+                    // depends on it, not the estimate).
+                    let w = radiance.element_sum() / 3.0 * PI * radius * radius * from_centre;
+                    (
+                        Sampler::Sphere {
+                            position: *position,
+                            radius: *radius,
+                            radiance: *radiance,
+                            targets,
+                        },
+                        w,
+                    )
+                }
+                Light::Environment { map, scale } => {
+                    let sampler =
+                        EnvironmentSampler::new(map.clone(), *scale, spheres.clone(), bounds);
+                    let area: f32 = spheres.iter().map(|(_, r, _)| PI * r * r).sum();
+                    // ≈ Σ_pixels L·ΔΩ × the targets' cross-section.
+                    let w = (sampler.total * 2.0 * std::f64::consts::PI.powi(2)
+                        / f64::from(map.width * map.height)) as f32
+                        * area;
+                    (Sampler::Environment(Box::new(sampler)), w)
+                }
             };
             samplers.push(sampler);
             weights.push(w.max(0.0));
@@ -241,9 +365,10 @@ impl Emitter {
         self.cdf.last().is_none_or(|&w| w <= 0.0)
     }
 
-    /// Draws a photon from four uniform numbers in [0, 1).
+    /// Draws a photon from four uniform numbers in [0, 1), and from `more` where an
+    /// extended light needs more.
     #[inline]
-    pub(crate) fn sample(&self, u: [f32; 4]) -> Photon {
+    pub(crate) fn sample(&self, u: [f32; 4], mut more: impl FnMut() -> f32) -> Photon {
         let (li, p_light, u0) = if self.cdf.len() == 1 {
             // One light: chosen with probability 1, u[0] left as it is.
             (0, 1.0, u[0])
@@ -307,10 +432,106 @@ impl Emitter {
                     power: *intensity * (light.angular_factor(dir) * omega_total / count as f32),
                 }
             }
+            Sampler::Sphere {
+                position,
+                radius,
+                radiance,
+                targets,
+            } => {
+                // x uniform on the sphere.
+                let z = 1.0 - 2.0 * u[1];
+                let rho = (1.0 - z * z).max(0.0).sqrt();
+                let phi = TAU * u[2];
+                let normal = Vec3::new(rho * phi.cos(), rho * phi.sin(), z);
+                let origin = *position + *radius * normal;
+                let cones: Vec<Cone> = targets
+                    .iter()
+                    .map(|(c, r, b)| aim_cone(origin, *c, *r, b))
+                    .collect();
+                let cdf = cumulative(cones.iter().map(Cone::solid_angle));
+                let c = &cones[pick(&cdf, u[3])];
+                let cos_t = 1.0 - more() * (1.0 - c.cos_max);
+                let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
+                let phi = TAU * more();
+                let dir =
+                    (cos_t * c.axis + sin_t * (phi.cos() * c.b1 + phi.sin() * c.b2)).normalize();
+                let count = cones
+                    .iter()
+                    .filter(|o| dir.dot(o.axis) >= o.cos_max)
+                    .count()
+                    .max(1);
+                let omega_total = cdf.last().copied().unwrap_or(0.0);
+                let area = 4.0 * PI * radius * radius;
+                let cos_out = normal.dot(dir).max(0.0);
+                Photon {
+                    // On the surface: the light is no object, nothing to start past.
+                    origin,
+                    dir,
+                    power: *radiance * (cos_out * area * omega_total / count as f32),
+                }
+            }
+            Sampler::Environment(env) => {
+                let (u1, u2) = (u0, u[1]);
+                let (du, dv) = (u[2], u[3]);
+                let Some((sky, pixel, pdf)) = env.direction(u1, u2, du, dv) else {
+                    return Photon {
+                        origin: Vec3::ZERO,
+                        dir: Vec3::Y,
+                        power: Vec3::ZERO,
+                    };
+                };
+                let dir = -sky;
+                let (b1, b2) = perpendicular_frame(dir);
+                let discs: Vec<Disc> = env
+                    .targets
+                    .iter()
+                    .map(|(c, r, b)| Disc {
+                        center: *c - c.dot(dir) * dir,
+                        radius: disc_radius(dir, *c, *r, b),
+                    })
+                    .collect();
+                let cdf = cumulative(discs.iter().map(|d| PI * d.radius * d.radius));
+                let d = &discs[pick(&cdf, more())];
+                let r = d.radius * more().sqrt();
+                let phi = TAU * more();
+                let x = d.center + r * (phi.cos() * b1 + phi.sin() * b2);
+                let count = discs
+                    .iter()
+                    .filter(|o| (x - o.center).length_squared() <= o.radius * o.radius)
+                    .count()
+                    .max(1);
+                let area_total = cdf.last().copied().unwrap_or(0.0);
+                let start = env
+                    .bounds
+                    .corners()
+                    .iter()
+                    .map(|k| k.dot(dir))
+                    .fold(f32::INFINITY, f32::min)
+                    - 1.0;
+                Photon {
+                    origin: x + start * dir,
+                    dir,
+                    power: env.map.pixels[pixel] * env.scale * (area_total / count as f32 / pdf),
+                }
+            }
         };
         photon.power /= p_light;
         photon
     }
+}
+
+/// Radius of the disc ⟂ `dir` around the projection of (`c`, `r`, box `b`): the
+/// narrower of the sphere's silhouette and the disc through the box's projected corners.
+fn disc_radius(dir: Vec3, c: Vec3, r: f32, b: &Aabb) -> f32 {
+    let by_corners = b
+        .corners()
+        .iter()
+        .map(|k| {
+            let v = *k - c;
+            (v - v.dot(dir) * dir).length()
+        })
+        .fold(0.0f32, f32::max);
+    r.min(by_corners) * 1.000_01 + 1e-6
 }
 
 /// The narrower of the cone from `apex` subtending the sphere (c, r) and the cone

@@ -155,7 +155,7 @@ impl Tracer<'_> {
 
     fn trace(&self, emitter: &Emitter, caustic: bool, rng: &mut UnitRng, out: &mut UnitOutput) {
         let u = [rng.next(), rng.next(), rng.next(), rng.next()];
-        let photon = emitter.sample(u);
+        let photon = emitter.sample(u, || rng.next());
         let (mut o, mut d, mut power) = (
             Vec3::from(photon.origin),
             Vec3::from(photon.dir),

@@ -305,6 +305,17 @@ fn pose_light(light: &Light, pose: &RigidPose) -> Light {
             cone_deg: *cone_deg,
             falloff_deg: *falloff_deg,
         },
+        Light::Sphere {
+            position,
+            radius,
+            radiance,
+        } => Light::Sphere {
+            position: pose.point(*position),
+            radius: *radius,
+            radiance: *radiance,
+        },
+        // Validation gives an environment light no motion.
+        Light::Environment { .. } => light.clone(),
     }
 }
 

@@ -98,6 +98,23 @@ pub(crate) fn scene_hash(scene: &Scene) -> u64 {
                     None => h.tag(0),
                 }
             }
+            Light::Sphere {
+                position,
+                radius,
+                radiance,
+            } => {
+                h.tag(3);
+                h.v3(*position);
+                h.f32(*radius);
+                h.v3(*radiance);
+            }
+            Light::Environment { map, scale } => {
+                h.tag(4);
+                h.v3(*scale);
+                h.u32(map.width);
+                h.u32(map.height);
+                map.pixels.iter().for_each(|p| h.v3(*p));
+            }
         }
     }
     match &scene.medium {

@@ -61,7 +61,7 @@ pub use animation::{
 };
 pub use camera::Camera;
 pub use error::SceneError;
-pub use light::{Light, Material, Medium, NamedMaterial};
+pub use light::{EnvironmentMap, Light, Material, Medium, NamedMaterial};
 pub use limits::{Limits, MAX_COORDINATE, format_bytes, parse_mib};
 pub use mesh::{MeshError, MeshTransform, smooth_normals};
 pub use shape::{Aabb, Heightfield, Mesh, Shape, Wave, perpendicular_frame, quad_axes};
@@ -179,8 +179,10 @@ impl Scene {
             }
             for (i, l) in posed.lights.iter().enumerate() {
                 let p = match l {
-                    Light::Point { position, .. } | Light::Spot { position, .. } => *position,
-                    Light::Directional { .. } => Vec3::ZERO,
+                    Light::Point { position, .. }
+                    | Light::Spot { position, .. }
+                    | Light::Sphere { position, .. } => *position,
+                    Light::Directional { .. } | Light::Environment { .. } => Vec3::ZERO,
                 };
                 if !p.is_finite() || p.abs().max_element() > MAX_COORDINATE {
                     return Err(err(

@@ -165,13 +165,15 @@ struct Tag {
 #[serde(tag = "type", rename_all = "snake_case")]
 #[schemars(
     rename = "Light",
-    description = "A light, by \"type\": directional (direction, irradiance in W/m²), point (position, intensity in W/sr) or spot (position, direction, intensity in W/sr, cone_deg, optional falloff_deg)."
+    description = "A light, by \"type\": directional (direction, irradiance in W/m²), point (position, intensity in W/sr), spot (position, direction, intensity in W/sr, cone_deg, optional falloff_deg), sphere (an area light: position, radius, radiance in W/m²/sr) or environment (radiance from every direction: a lat-long EXR `path` or a constant `radiance`, times an optional `scale`)."
 )]
 #[allow(dead_code)]
 enum LightSchema {
     Directional(RawDirectional),
     Point(RawPoint),
     Spot(RawSpot),
+    Sphere(RawSphereLight),
+    Environment(RawEnvironment),
 }
 
 #[derive(schemars::JsonSchema)]
@@ -212,6 +214,40 @@ pub(crate) enum RawLight {
     Directional(RawDirectional),
     Point(RawPoint),
     Spot(RawSpot),
+    Sphere(RawSphereLight),
+    Environment(RawEnvironment),
+}
+
+#[derive(Deserialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawSphereLight {
+    #[serde(rename = "type")]
+    #[schemars(skip)]
+    _kind: IgnoredAny,
+    pub(crate) position: [f32; 3],
+    pub(crate) radius: f32,
+    /// W·m⁻²·sr⁻¹ leaving the surface.
+    pub(crate) radiance: [f32; 3],
+    /// Rigid motion of the light from its rest pose.
+    #[serde(default)]
+    pub(crate) motion: Option<RawMotion>,
+}
+
+#[derive(Deserialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawEnvironment {
+    #[serde(rename = "type")]
+    #[schemars(skip)]
+    _kind: IgnoredAny,
+    /// A lat-long EXR map relative to the scene file (Mitsuba 3's convention).
+    #[serde(default)]
+    pub(crate) path: Option<String>,
+    /// A constant radiance from every direction instead (W·m⁻²·sr⁻¹).
+    #[serde(default)]
+    pub(crate) radiance: Option<[f32; 3]>,
+    /// Multiplies the map (default 1).
+    #[serde(default)]
+    pub(crate) scale: Option<[f32; 3]>,
 }
 
 impl RawLight {
@@ -221,6 +257,8 @@ impl RawLight {
             RawLight::Directional(l) => l.motion.as_ref(),
             RawLight::Point(l) => l.motion.as_ref(),
             RawLight::Spot(l) => l.motion.as_ref(),
+            RawLight::Sphere(l) => l.motion.as_ref(),
+            RawLight::Environment(_) => None,
         }
     }
 }
@@ -566,6 +604,10 @@ impl RawLight {
                 }),
                 ("point", |s, f, p| variant(s, f, p, RawLight::Point)),
                 ("spot", |s, f, p| variant(s, f, p, RawLight::Spot)),
+                ("sphere", |s, f, p| variant(s, f, p, RawLight::Sphere)),
+                ("environment", |s, f, p| {
+                    variant(s, f, p, RawLight::Environment)
+                }),
             ],
         )
     }

@@ -10,7 +10,7 @@ use glam::{Vec2, Vec3};
 use crate::animation::{
     Animation, Keyframe, MAX_KEYFRAMES, MAX_TIME_S, Motion, wave_angular_frequency,
 };
-use crate::light::{Light, Material, Medium, NamedMaterial};
+use crate::light::{EnvironmentMap, Light, Material, Medium, NamedMaterial};
 use crate::limits::{Limits, MAX_COORDINATE};
 use crate::mesh::{Budget, MeshError, MeshTransform, invalid, load_gltf, load_obj};
 use crate::raw::{self, RawLight, RawMaterial, RawScene, RawShape, Source};
@@ -157,8 +157,10 @@ impl Builder<'_> {
                 Some(m) => {
                     let mpath = format!("{path}.motion");
                     let pivot = match &light {
-                        Light::Directional { .. } => Vec3::ZERO,
-                        Light::Point { position, .. } | Light::Spot { position, .. } => *position,
+                        Light::Directional { .. } | Light::Environment { .. } => Vec3::ZERO,
+                        Light::Point { position, .. }
+                        | Light::Spot { position, .. }
+                        | Light::Sphere { position, .. } => *position,
                     };
                     let m = self.motion(&mpath, &m, pivot)?;
                     if matches!(light, Light::Directional { .. }) && !m.is_rotation_only() {
@@ -415,6 +417,39 @@ impl Builder<'_> {
                     intensity,
                     cone_deg: cone,
                     falloff_deg: d.falloff_deg,
+                }
+            }
+            RawLight::Sphere(d) => Light::Sphere {
+                position: self.point(&p("position"), d.position)?,
+                radius: self.positive(&p("radius"), d.radius)?,
+                radiance: self.non_negative3(&p("radiance"), d.radiance)?,
+            },
+            RawLight::Environment(d) => {
+                let scale = match d.scale {
+                    Some(v) => self.non_negative3(&p("scale"), v)?,
+                    None => Vec3::ONE,
+                };
+                let map = match (&d.path, d.radiance) {
+                    (Some(_), Some(_)) | (None, None) => {
+                        return Err(self.err(
+                            path,
+                            "expected either `path` (a lat-long EXR map) or `radiance` (a constant sky), not both or neither",
+                        ));
+                    }
+                    (None, Some(r)) => {
+                        EnvironmentMap::constant(self.non_negative3(&p("radiance"), r)?)
+                    }
+                    (Some(file), None) => {
+                        let resolved = self.base_dir.join(file);
+                        let limits = self.budget.borrow().limits;
+                        load_environment_map(&resolved, &limits).map_err(|why| {
+                            self.err(p("path"), format!("{}: {why}", resolved.display()))
+                        })?
+                    }
+                };
+                Light::Environment {
+                    map: Arc::new(map),
+                    scale,
                 }
             }
         })
@@ -679,6 +714,66 @@ impl Builder<'_> {
         }
         Ok(())
     }
+}
+
+/// Largest environment map side (pixels).
+pub(crate) const MAX_ENVIRONMENT_SIDE: u32 = 16384;
+
+/// Reads a lat-long EXR map, its header checked before any pixel is allocated.
+fn load_environment_map(path: &Path, limits: &Limits) -> Result<EnvironmentMap, String> {
+    let bytes = std::fs::metadata(path)
+        .map_err(|e| format!("cannot read the environment map: {e}"))?
+        .len();
+    if bytes > limits.max_file_bytes {
+        return Err(format!(
+            "the file is {bytes} bytes, past the limit of {} (--max-file-bytes)",
+            limits.max_file_bytes
+        ));
+    }
+    let meta = exr::meta::MetaData::read_from_file(path, false)
+        .map_err(|e| format!("not a readable EXR file: {e}"))?;
+    let header = meta
+        .headers
+        .first()
+        .ok_or_else(|| "an EXR file without layers".to_string())?;
+    let size = header.layer_size;
+    let (w, h) = (size.width(), size.height());
+    if w == 0 || h == 0 || w > MAX_ENVIRONMENT_SIDE as usize || h > MAX_ENVIRONMENT_SIDE as usize {
+        return Err(format!(
+            "expected a map of 1..={MAX_ENVIRONMENT_SIDE} pixels per side, the file says {w}x{h}"
+        ));
+    }
+    use exr::prelude::*;
+    let image = read_first_rgba_layer_from_file(
+        path,
+        |resolution: Vec2<usize>, _channels: &RgbaChannels| {
+            vec![glam::Vec3::ZERO; resolution.width() * resolution.height()]
+        },
+        move |px: &mut Vec<glam::Vec3>, pos: Vec2<usize>, (r, g, b, _a): (f32, f32, f32, f32)| {
+            if let Some(p) = px.get_mut(pos.y() * w + pos.x()) {
+                *p = glam::Vec3::new(r, g, b);
+            }
+        },
+    )
+    .map_err(|e| format!("cannot read the EXR pixels: {e}"))?;
+    let pixels = image.layer_data.channel_data.pixels;
+    if let Some(i) = pixels
+        .iter()
+        .position(|p| !(p.is_finite() && p.cmpge(glam::Vec3::ZERO).all()))
+    {
+        return Err(format!(
+            "pixel ({}, {}) is {}: expected finite non-negative radiance",
+            i % w,
+            i / w,
+            pixels[i]
+        ));
+    }
+    Ok(EnvironmentMap {
+        source: Some(path.to_path_buf()),
+        width: w as u32,
+        height: h as u32,
+        pixels,
+    })
 }
 
 /// A material derived from a glTF file must satisfy the same ranges as one written in

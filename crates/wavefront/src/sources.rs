@@ -79,6 +79,8 @@ pub(crate) fn ray_lattice(
     let mut sources = Vec::with_capacity((n * n) as usize);
     let lattice = |k: u32| (k as f32 / (n - 1) as f32) * 2.0 - 1.0;
     match *light {
+        // Declined by the capability check (no wavefront of an extended light).
+        Light::Sphere { .. } | Light::Environment { .. } => return None,
         Light::Directional { direction, .. } => {
             let (u, v) = orthonormal_basis(direction);
             let half = radius * 1.02;
