@@ -194,6 +194,7 @@ pub const CAPABILITIES: Capabilities = Capabilities {
     directional_light: true,
     point_light: true,
     spot_light: true,
+    sphere_light: false,
 };
 
 /// Scene limits of the beam pipeline beyond [`CAPABILITIES`].

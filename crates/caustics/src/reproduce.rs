@@ -681,6 +681,7 @@ fn run_one(e: &Experiment, spec: &RunSpec, args: &ReproduceArgs, out: &Path) -> 
         quick_reference_photons: 0,
         ceilings: args.ceilings.clone(),
         instrumentation_overhead: false,
+        resolution: None,
         time: None,
         animate: None,
         reference_every: None,

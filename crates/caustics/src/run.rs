@@ -85,6 +85,10 @@ pub struct RunOptions {
     /// exists, gives every pass its roofline in result.json.
     #[arg(long, value_name = "DIR", default_value = crate::ceilings_cmd::DEFAULT_ROOT)]
     pub ceilings: PathBuf,
+    /// Render at this camera resolution instead of the scene file's (`WIDTHxHEIGHT`,
+    /// e.g. `256x192`; the reference cache keys the resolution).
+    #[arg(long, value_name = "WxH")]
+    pub resolution: Option<String>,
     /// Render the scene at this instant (seconds; default: the file's `"time"`, else 0).
     /// Only an animated scene (moving objects or lights, travelling waves) changes.
     #[arg(long, value_name = "SECONDS", conflicts_with = "animate")]
@@ -139,6 +143,19 @@ pub enum RunOutcome {
         /// Why.
         reason: String,
     },
+}
+
+/// `WIDTHxHEIGHT` of `--resolution`, each side in 1..=16384.
+pub fn parse_resolution(text: &str) -> Result<(u32, u32)> {
+    let parsed = text
+        .split_once(['x', 'X'])
+        .and_then(|(w, h)| Some((w.trim().parse::<u32>().ok()?, h.trim().parse::<u32>().ok()?)));
+    match parsed {
+        Some((w, h)) if (1..=16384).contains(&w) && (1..=16384).contains(&h) => Ok((w, h)),
+        _ => {
+            bail!("--resolution {text:?}: expected WIDTHxHEIGHT, each in 1..=16384 (e.g. 256x192)")
+        }
+    }
 }
 
 /// Turns `key=value` flags into a JSON object. Values parse as JSON when they can
@@ -212,8 +229,12 @@ pub fn run(o: &RunOptions) -> Result<RunOutcome> {
         .as_deref()
         .map(crate::animate::AnimateSpec::parse)
         .transpose()?;
+    let resolution = o.resolution.as_deref().map(parse_resolution).transpose()?;
     let scene_path = caustics_scene::resolve(&o.scene)?;
-    let scene = Scene::load_with_limits(&scene_path, &o.limits.limits())?;
+    let mut scene = Scene::load_with_limits(&scene_path, &o.limits.limits())?;
+    if let Some((w, h)) = resolution {
+        (scene.camera.width, scene.camera.height) = (w, h);
+    }
     if let Some(spec) = animate {
         return crate::animate::run_animated(o, &spec, scene);
     }
@@ -791,6 +812,16 @@ fn fragments(frame: &caustics_gpu::FrameSample, fill: &[u32], method: &str) -> O
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn resolutions_parse_or_name_the_flag() {
+        assert_eq!(parse_resolution("256x192").ok(), Some((256, 192)));
+        assert_eq!(parse_resolution("64X48").ok(), Some((64, 48)));
+        for bad in ["256", "0x10", "10x99999", "axb", ""] {
+            let err = parse_resolution(bad).expect_err(bad).to_string();
+            assert!(err.contains("--resolution"), "{bad}: {err}");
+        }
+    }
 
     #[test]
     fn param_flags_parse_json_values_and_reject_junk() {

@@ -134,7 +134,9 @@ impl DirectLighting {
             .iter()
             .map(|light| {
                 let res = match light {
-                    caustics_scene::Light::Point { .. } => options.cube_shadow_resolution,
+                    caustics_scene::Light::Point { .. } | caustics_scene::Light::Sphere { .. } => {
+                        options.cube_shadow_resolution
+                    }
                     _ => options.shadow_resolution,
                 };
                 let view = LightView::fit(light, &bounds, res);

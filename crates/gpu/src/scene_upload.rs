@@ -283,9 +283,9 @@ pub fn gpu_light(l: &Light) -> GpuLight {
             power: intensity.extend(0.0).to_array(),
             ..Default::default()
         },
-        // GpuScene::upload refuses extended lights (the methods decline them); their
-        // far-field stand-ins keep this total: a sphere light is a point light of
-        // intensity π r² L, an environment a black directional light.
+        // A sphere light is, from afar, a point light of intensity π r² L (pinhole
+        // draws it as the disc of radius r it is); GpuScene::upload refuses an
+        // environment, whose arm keeps this total: a black directional light.
         Light::Sphere {
             position,
             radius,
@@ -313,16 +313,18 @@ impl GpuScene {
         scene: Arc<Scene>,
         tessellation: Tessellation,
     ) -> Result<Self, GpuError> {
+        // A sphere light goes up as its far-field point light (gpu_light); the methods
+        // that take one (pinhole) read its radius from the scene.
         if let Some((i, l)) = scene
             .lights
             .iter()
             .enumerate()
-            .find(|(_, l)| l.is_extended())
+            .find(|(_, l)| matches!(l, Light::Environment { .. }))
         {
             return Err(GpuError::Upload {
                 scene: scene.source.clone(),
                 message: format!(
-                    "lights[{i}] is a {} light: the GPU methods render point, spot and directional lights (the reference renders extended lights)",
+                    "lights[{i}] is an {} light: the GPU methods render point, spot, directional and (pinhole) sphere lights (the reference renders environments)",
                     l.kind()
                 ),
             });

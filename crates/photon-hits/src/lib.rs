@@ -250,6 +250,7 @@ pub const CAPABILITIES: Capabilities = Capabilities {
     directional_light: true,
     point_light: true,
     spot_light: true,
+    sphere_light: false,
 };
 
 /// Scene checks shared by both methods.

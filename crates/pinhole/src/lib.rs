@@ -43,6 +43,11 @@
 //!   point and its normal, as the paper; `filtering=curvature` moves the normal only
 //!   (zero footprint on a flat mirror); `filtering=off` point-samples level 0.
 //!
+//! A sphere light (`"type": "sphere"`) is the disc of its own radius r at its centre,
+//! facing the generator (its half angle atan(r/D) replaces `light_angle`), of radiance
+//! L/cos β: the sphere's, with its constant projected area. So pinhole renders extended
+//! sphere lights at no extra cost, as the paper says of extended lights (§5).
+//!
 //! Supports one light of any kind and one caustic generator: a mirror of any shape
 //! (sphere, open cylinder as Wand's ring, quad, triangle mesh, heightfield), a
 //! dielectric sphere (in and out: two refractions, the special case whose exit point is
@@ -152,7 +157,7 @@ method_params! {
         /// angular radius (rad) of the light in the cube map, seen from the generator's
         /// centre (paper: 0.016; at most 0.5 rad = 29°: the one stored face holds cones
         /// under 45°, and a light that wide is no longer the paper's small source)
-        light_angle: f64 = 0.016 => above(0.0, 0.5);
+        light_angle: f64 = 0.016 => above(0.0, MAX_LIGHT_ANGLE as f64);
         /// cube map face size in texels (power of two, 8 to 2048: a 2048² R16F map with
         /// mips is 11 MB)
         cube_size: u32 = 256 => closed(8.0, 2048.0);
@@ -192,6 +197,7 @@ impl Method for Pinhole {
         directional_light: true,
         point_light: true,
         spot_light: true,
+        sphere_light: true,
     };
     const COUNTERS: &'static [CounterDoc] = COUNTER_DOCS;
 
@@ -276,6 +282,24 @@ pub fn caustic_generator(scene: &Scene) -> Result<(usize, GeneratorMode), Unsupp
 
 fn check_scene(scene: &Scene) -> Result<(), Unsupported> {
     let (g, _) = caustic_generator(scene)?;
+    if let Light::Sphere {
+        position, radius, ..
+    } = scene.lights[0]
+    {
+        let bounds = scene.objects[g].shape.bounds();
+        let d = position.distance(bounds.center());
+        if d <= radius + bounds.bounding_sphere_radius() {
+            return Err(Unsupported(
+                "the sphere light reaches into the generator's bounds: its disc in the map would hold the generator".into(),
+            ));
+        }
+        if (radius / d).atan() > MAX_LIGHT_ANGLE {
+            return Err(Unsupported(format!(
+                "the sphere light spans {:.3} rad around the map's axis seen from the generator: the map's one face holds up to {MAX_LIGHT_ANGLE} rad (the light_angle bound)",
+                (radius / d).atan()
+            )));
+        }
+    }
     if let Light::Point { position, .. } | Light::Spot { position, .. } = scene.lights[0] {
         let centre = scene.objects[g].shape.bounds().center();
         if position.distance(centre) < 1e-3 {
@@ -286,6 +310,10 @@ fn check_scene(scene: &Scene) -> Result<(), Unsupported> {
     }
     Ok(())
 }
+
+/// Largest half angle of the light's disc in the map (rad): `light_angle`'s bound, and
+/// a sphere light's atan(r/D).
+const MAX_LIGHT_ANGLE: f32 = 0.5;
 
 /// Matches `Sample` in types.wgsl.
 #[repr(C)]
@@ -360,9 +388,25 @@ impl LightDisc {
                     radiance_per_power: 1.0 / (std::f32::consts::PI * radius * radius),
                 }
             }
-            // Declined by the capability check (the light map of an extended light is
-            // not built yet): a black disc.
-            Light::Sphere { .. } | Light::Environment { .. } => Self {
+            // A sphere light is the disc it shows: radius r, facing the generator
+            // (`light_angle` does not apply); the disc's radiance I/(π r² cos β) with
+            // I = π r² L is L/cos β, the cos β giving back the sphere's constant
+            // projected area seen from any sample.
+            Light::Sphere {
+                position, radius, ..
+            } => {
+                let to = position - center;
+                let d = to.length();
+                Self {
+                    center,
+                    axis: to / d,
+                    radius,
+                    alpha: (radius / d).atan(),
+                    radiance_per_power: 1.0 / (std::f32::consts::PI * radius * radius),
+                }
+            }
+            // Declined by the capability check (no environment map yet): a black disc.
+            Light::Environment { .. } => Self {
                 center,
                 axis: Vec3::Y,
                 radius: 0.0,

@@ -125,6 +125,7 @@ impl Method for Wavefront {
         directional_light: true,
         point_light: true,
         spot_light: true,
+        sphere_light: false,
     };
     const COUNTERS: &'static [CounterDoc] = COUNTER_DOCS;
 

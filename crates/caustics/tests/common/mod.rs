@@ -48,6 +48,7 @@ pub(crate) fn run_options(scene: &Path, out: &Path, method: &str, params: &[&str
         quick_reference_photons: 0,
         ceilings: out.join("no-ceilings"),
         instrumentation_overhead: false,
+        resolution: None,
         time: None,
         animate: None,
         reference_every: None,
