@@ -616,6 +616,185 @@ pub fn side_by_side_file(dir: &Path) -> Result<PathBuf> {
     Ok(path)
 }
 
+/// Every `animation.json` under `root`, keyed by its folder relative to `root`.
+pub fn find_keyed(root: &Path) -> Result<std::collections::BTreeMap<String, AnimationResult>> {
+    fn walk(root: &Path, dir: &Path, out: &mut Vec<(String, PathBuf)>) -> Result<()> {
+        let entries =
+            std::fs::read_dir(dir).with_context(|| format!("reading {}", dir.display()))?;
+        for entry in entries {
+            let path = entry?.path();
+            if path.is_dir() {
+                walk(root, &path, out)?;
+            } else if path.file_name().is_some_and(|n| n == "animation.json") {
+                let rel = path
+                    .parent()
+                    .and_then(|p| p.strip_prefix(root).ok())
+                    .map(|p| p.display().to_string())
+                    .unwrap_or_default();
+                out.push((rel, path));
+            }
+        }
+        Ok(())
+    }
+    let mut files = Vec::new();
+    if root.is_dir() {
+        walk(root, root, &mut files)?;
+    }
+    files
+        .into_iter()
+        .map(|(key, path)| Ok((key, load(&path)?)))
+        .collect()
+}
+
+/// `caustics compare` of the sequences in BASE and NEW, paired by folder: their inputs
+/// (scene, resolution, sequence, method, parameters, adapter) must match; then the
+/// per-frame method GPU times (as every run's), the scored instants' mean relMSE and
+/// the temporal and still relRMSE are gated with `--error-tolerance`.
+pub(crate) fn compare_sequences(
+    base: &std::collections::BTreeMap<String, AnimationResult>,
+    new: &std::collections::BTreeMap<String, AnimationResult>,
+    args: &crate::compare::CompareArgs,
+    report: &mut crate::compare::Report,
+) {
+    use crate::compare::{Verdict, compare_timing, line};
+    for (key, b) in base {
+        let Some(n) = new.get(key) else {
+            report.lines.push(line(
+                key,
+                "sequence",
+                "present",
+                "missing",
+                "",
+                Verdict::Regression,
+            ));
+            continue;
+        };
+        report.runs += 1;
+        let inputs = |r: &AnimationResult| {
+            let mut v = vec![
+                ("scene", r.scene.name.clone()),
+                (
+                    "resolution",
+                    format!("{}x{}", r.scene.width, r.scene.height),
+                ),
+                ("first instant's hash", r.scene.hash.clone()),
+                (
+                    "sequence",
+                    format!(
+                        "{}:{}:{} every {}, grid {}",
+                        r.sequence.start_s,
+                        r.sequence.end_s,
+                        r.sequence.fps,
+                        r.reference_every,
+                        r.score_grid
+                    ),
+                ),
+                ("method", r.method.name.clone()),
+                ("parameters", r.method.params.to_string()),
+            ];
+            if !args.across_adapters {
+                v.push((
+                    "adapter",
+                    format!("{} ({})", r.machine.adapter, r.machine.driver_info),
+                ));
+            }
+            v
+        };
+        let differ: Vec<String> = inputs(b)
+            .into_iter()
+            .zip(inputs(n))
+            .filter(|(x, y)| x.1 != y.1)
+            .map(|(x, y)| format!("{}: {} → {}", x.0, x.1, y.1))
+            .collect();
+        if !differ.is_empty() {
+            report.lines.push(line(
+                key,
+                "sequence",
+                "",
+                "",
+                &differ.join("; "),
+                Verdict::NotComparable,
+            ));
+            continue;
+        }
+        if let (Some(x), Some(y)) = (&b.timing.method_gpu_ms, &n.timing.method_gpu_ms) {
+            let mut l = compare_timing(key, "method GPU ms (per instant)", x, y, args);
+            if args.no_timings && l.verdict == Verdict::Regression {
+                l.verdict = Verdict::Info;
+            }
+            report.lines.push(l);
+        }
+        let mean_rel_mse = |r: &AnimationResult| {
+            let v: Vec<f64> = r
+                .frames
+                .iter()
+                .filter_map(|f| f.errors.as_ref().map(|e| e.rel_mse))
+                .collect();
+            (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
+        };
+        for (measure, x, y) in [
+            ("temporal relRMSE", b.temporal_rel_rmse, n.temporal_rel_rmse),
+            (
+                "still relRMSE (temporal pairs)",
+                b.still_rel_rmse,
+                n.still_rel_rmse,
+            ),
+            (
+                "relMSE (scored instants, mean)",
+                mean_rel_mse(b),
+                mean_rel_mse(n),
+            ),
+        ] {
+            let (Some(x), Some(y)) = (x, y) else {
+                if x.is_some() {
+                    report.lines.push(line(
+                        key,
+                        measure,
+                        "present",
+                        "absent",
+                        "",
+                        Verdict::Regression,
+                    ));
+                }
+                continue;
+            };
+            let allowed = args.error_tolerance * x.abs();
+            let verdict = if y > x + allowed {
+                Verdict::Regression
+            } else if y < x - allowed {
+                Verdict::Better
+            } else {
+                Verdict::Same
+            };
+            let mut l = line(
+                key,
+                measure,
+                &format!("{x:.4e}"),
+                &format!("{y:.4e}"),
+                &format!("{:+.1}%", 100.0 * (y / x.max(1e-300) - 1.0)),
+                verdict,
+            );
+            l.detail = format!("tolerance {:.0}%", 100.0 * args.error_tolerance);
+            l.band = Some(crate::compare::Band::Value {
+                base: x,
+                new: y,
+                allowed,
+            });
+            report.lines.push(l);
+        }
+    }
+    for key in new.keys().filter(|k| !base.contains_key(*k)) {
+        report.lines.push(line(
+            key,
+            "sequence",
+            "–",
+            "present",
+            "not in BASE",
+            Verdict::New,
+        ));
+    }
+}
+
 /// The folder a sequence writes to.
 pub fn animation_dir(out: &Path, scene: &str, method: &str) -> PathBuf {
     out.join(scene).join(method).join("animation")

@@ -448,6 +448,18 @@ fn band_svg(b: &Band) -> String {
 /// lists as done count, so stale runs of an earlier reproduction into the same folder
 /// are not compared.
 pub fn collect_results(root: &Path) -> Result<BTreeMap<String, RunResult>> {
+    let out = collect_results_maybe_none(root)?;
+    if out.is_empty() {
+        bail!(
+            "{}: holds no result.json (expected a `caustics reproduce` or `caustics run` output folder)",
+            root.display()
+        );
+    }
+    Ok(out)
+}
+
+/// [`collect_results`], empty when a folder without a manifest holds no result.json.
+fn collect_results_maybe_none(root: &Path) -> Result<BTreeMap<String, RunResult>> {
     if !root.is_dir() {
         bail!("{}: no such folder", root.display());
     }
@@ -488,12 +500,6 @@ pub fn collect_results(root: &Path) -> Result<BTreeMap<String, RunResult>> {
             }
         }
     }
-    if out.is_empty() {
-        bail!(
-            "{}: holds no result.json (expected a `caustics reproduce` or `caustics run` output folder)",
-            root.display()
-        );
-    }
     Ok(out)
 }
 
@@ -533,9 +539,23 @@ pub fn compare(args: &CompareArgs) -> Result<Report> {
             }
         }
     }
-    let base = collect_results(&args.base).context("BASE")?;
-    let new = collect_results(&args.new).context("NEW")?;
+    let base = collect_results_maybe_none(&args.base).context("BASE")?;
+    let new = collect_results_maybe_none(&args.new).context("NEW")?;
+    let base_sequences = crate::animate::find_keyed(&args.base).context("BASE")?;
+    let new_sequences = crate::animate::find_keyed(&args.new).context("NEW")?;
+    for (folder, runs, sequences) in [
+        (&args.base, &base, &base_sequences),
+        (&args.new, &new, &new_sequences),
+    ] {
+        if runs.is_empty() && sequences.is_empty() {
+            bail!(
+                "{}: holds no result.json and no animation.json (expected a `caustics reproduce`, `caustics run` or `caustics run --animate` output folder)",
+                folder.display()
+            );
+        }
+    }
     let mut report = Report::default();
+    crate::animate::compare_sequences(&base_sequences, &new_sequences, args, &mut report);
     for (key, b) in &base {
         let Some(n) = new.get(key) else {
             report.lines.push(line(
@@ -599,7 +619,14 @@ pub fn write_html(path: &Path, args: &CompareArgs, report: &Report) -> Result<()
     Ok(())
 }
 
-fn line(run: &str, measure: &str, base: &str, new: &str, change: &str, verdict: Verdict) -> Line {
+pub(crate) fn line(
+    run: &str,
+    measure: &str,
+    base: &str,
+    new: &str,
+    change: &str,
+    verdict: Verdict,
+) -> Line {
     Line {
         run: run.into(),
         measure: measure.into(),

@@ -1,5 +1,5 @@
-//! JSON Schemas (draft 2020-12) of the files a user writes or reads: scene, experiment
-//! and result files, generated from the Rust types that read them (`schemars`, which
+//! JSON Schemas (draft 2020-12) of the files a user writes or reads: scene, experiment,
+//! result, ceilings and animation files, generated from the Rust types that read them (`schemars`, which
 //! follows their serde attributes) and committed under `schemas/`; a test checks that
 //! the committed ones are current and that every committed scene, experiment and result
 //! file validates against them. `caustics schema KIND` prints one.
@@ -15,15 +15,18 @@ pub enum SchemaKind {
     Result,
     /// An adapter's ceilings record (`results/ceilings/*.json`, `caustics ceilings`).
     Ceilings,
+    /// A sequence's `animation.json` (`caustics run --animate`).
+    Animation,
 }
 
 impl SchemaKind {
     /// Every kind, in the order the README lists them.
-    pub const ALL: [SchemaKind; 4] = [
+    pub const ALL: [SchemaKind; 5] = [
         SchemaKind::Scene,
         SchemaKind::Experiment,
         SchemaKind::Result,
         SchemaKind::Ceilings,
+        SchemaKind::Animation,
     ];
 
     /// The committed file's name under `schemas/`.
@@ -33,6 +36,7 @@ impl SchemaKind {
             SchemaKind::Experiment => "experiment.schema.json",
             SchemaKind::Result => "result.schema.json",
             SchemaKind::Ceilings => "ceilings.schema.json",
+            SchemaKind::Animation => "animation.schema.json",
         }
     }
 }
@@ -44,6 +48,7 @@ pub fn schema(kind: SchemaKind) -> serde_json::Value {
         SchemaKind::Experiment => schemars::schema_for!(crate::experiment::ExperimentFile),
         SchemaKind::Result => schemars::schema_for!(crate::result::RunResult),
         SchemaKind::Ceilings => schemars::schema_for!(crate::ceilings_cmd::CeilingsRecord),
+        SchemaKind::Animation => schemars::schema_for!(crate::animate::AnimationResult),
     };
     serde_json::to_value(s).unwrap_or(serde_json::Value::Null)
 }

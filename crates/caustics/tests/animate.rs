@@ -72,6 +72,42 @@ fn a_water_sequence_is_new_at_every_instant_and_a_still_run_repeats_an_instant()
     assert_eq!(reloaded.frames.len(), 3);
     assert!(dir.join("animation.md").is_file());
 
+    // compare pairs sequences: a folder against a copy of itself has no regression; a
+    // copy whose temporal error grew 10% has one.
+    let copy = tmp.path().join("copy");
+    let copy_dir = copy.join("water_pool/wavefront/animation");
+    std::fs::create_dir_all(&copy_dir).expect("mkdir");
+    let text = std::fs::read_to_string(dir.join("animation.json")).expect("read");
+    std::fs::write(copy_dir.join("animation.json"), &text).expect("write");
+    let args = |new: &std::path::Path| caustics::compare::CompareArgs {
+        base: tmp.path().join("water_pool"),
+        new: new.to_owned(),
+        time_threshold: 0.05,
+        alpha: 0.01,
+        count_tolerance: 0.0,
+        error_tolerance: 0.02,
+        noise_k: 0.5,
+        no_timings: true,
+        verbose: false,
+        wide: false,
+        across_adapters: false,
+        html: None,
+    };
+    let same = caustics::compare::compare(&args(&copy.join("water_pool"))).expect("compares");
+    assert_eq!((same.runs, same.regressions()), (1, 0));
+    let mut worse: serde_json::Value = serde_json::from_str(&text).expect("json");
+    let t = worse["temporal_rel_rmse"]
+        .as_f64()
+        .expect("a temporal error");
+    worse["temporal_rel_rmse"] = (t * 1.1).into();
+    std::fs::write(copy_dir.join("animation.json"), worse.to_string()).expect("write");
+    let report = caustics::compare::compare(&args(&copy.join("water_pool"))).expect("compares");
+    assert_eq!(report.regressions(), 1, "{:?}", report.lines);
+    assert!(
+        report.lines.iter().any(|l| l.measure == "temporal relRMSE"
+            && l.verdict == caustics::compare::Verdict::Regression)
+    );
+
     // The same instant as a still run: the same scene, reference and errors.
     let still_of = &r.frames[1];
     let mut still = options(&scene, &tmp.path().join("still"), "wavefront");

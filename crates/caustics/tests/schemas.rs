@@ -66,13 +66,19 @@ fn every_committed_file_validates_against_its_schema() {
             p.file_name().is_some_and(|n| n == "result.json")
         }),
         (SchemaKind::Ceilings, "results/ceilings", &json),
+        (SchemaKind::Animation, "results", &|p: &Path| {
+            p.file_name().is_some_and(|n| n == "animation.json")
+        }),
     ] {
         let (schemas, index) = validator(kind);
         let mut list = Vec::new();
         files(&root().join(dir), keep, &mut list);
         if kind == SchemaKind::Scene {
             // Mesh folders hold glTF JSON, which is not a scene.
-            list.retain(|p| p.parent() == Some(root().join("scenes").as_path()));
+            list.retain(|p| {
+                p.parent() == Some(root().join("scenes").as_path())
+                    || p.parent() == Some(root().join("scenes/extended").as_path())
+            });
         }
         assert!(!list.is_empty(), "no {kind:?} files under {dir}");
         for p in &list {
