@@ -195,6 +195,7 @@ pub const CAPABILITIES: Capabilities = Capabilities {
     point_light: true,
     spot_light: true,
     sphere_light: false,
+    environment_light: false,
 };
 
 /// Scene limits of the beam pipeline beyond [`CAPABILITIES`].

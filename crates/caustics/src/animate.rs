@@ -4,8 +4,8 @@
 //! the method created anew, so no method reuses anything of the previous frame (what a
 //! method costs when nothing can be cached). The rebuild (upload, the method's setup,
 //! pipelines included) is timed on the CPU apart from the frame. Each instant gets one
-//! untimed frame, then one timed frame, so the GPU time is the frame's own and not the
-//! first use of new pipelines.
+//! untimed count frame (the counters are read after it), then one timed frame, so the
+//! GPU time is the frame's own and not the first use of new pipelines.
 //!
 //! Every `--reference-every`-th instant is scored like a still run (pixel-averaged
 //! scoring frame against a reference posed at that instant, from the cache or rendered
@@ -165,7 +165,7 @@ pub struct AnimationFrame {
     pub frame_gpu_ms: Option<f64>,
     /// CPU wall time of this instant's rebuild (ms).
     pub rebuild_ms: f64,
-    /// The method's counters at this instant.
+    /// The method's counters at this instant (of its untimed count frame).
     pub counters: std::collections::BTreeMap<String, u64>,
     /// Surface-caustic errors of the pixel-averaged scoring frame against the reference
     /// at this instant (scored instants only).
@@ -274,12 +274,17 @@ pub fn run_animated(o: &RunOptions, spec: &AnimateSpec, scene: Scene) -> Result<
         let renderer = Renderer::new(&ctx, gpu_scene, RendererOptions::default())?;
         let mut method = (info.create)(&ctx, &renderer, &parsed)?;
         let rebuild_ms = rebuild_started.elapsed().as_secs_f64() * 1e3;
+        // The untimed frame is a count frame: it takes the first use of the new
+        // pipelines, and the counters are read after it (some methods count only in
+        // count frames, e.g. pinhole's gather); then the timed frame.
         let mut profiler = PassProfiler::new(&ctx, 2);
-        for _ in 0..2 {
-            let mut frame = renderer.begin_frame(&mut profiler, FrameMode::Timed)?;
-            method.record(&mut frame)?;
-            frame.submit(&ctx)?;
-        }
+        let mut frame = renderer.begin_frame(&mut profiler, FrameMode::Count)?;
+        method.record(&mut frame)?;
+        frame.submit(&ctx)?;
+        let counters = method.counters(&ctx)?;
+        let mut frame = renderer.begin_frame(&mut profiler, FrameMode::Timed)?;
+        method.record(&mut frame)?;
+        frame.submit(&ctx)?;
         let sample = profiler
             .collect(&ctx)?
             .pop()
@@ -290,7 +295,6 @@ pub fn run_animated(o: &RunOptions, spec: &AnimateSpec, scene: Scene) -> Result<
             &o.method,
         );
         samples.push(sample);
-        let counters = method.counters(&ctx)?;
         let mut frame = AnimationFrame {
             index: i,
             time_s: t,

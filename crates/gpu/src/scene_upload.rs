@@ -284,8 +284,8 @@ pub fn gpu_light(l: &Light) -> GpuLight {
             ..Default::default()
         },
         // A sphere light is, from afar, a point light of intensity π r² L (pinhole
-        // draws it as the disc of radius r it is); GpuScene::upload refuses an
-        // environment, whose arm keeps this total: a black directional light.
+        // draws it as the disc of radius r it is); an environment a black directional
+        // light, so the base passes ignore it (pinhole reads its map from the scene).
         Light::Sphere {
             position,
             radius,
@@ -313,22 +313,10 @@ impl GpuScene {
         scene: Arc<Scene>,
         tessellation: Tessellation,
     ) -> Result<Self, GpuError> {
-        // A sphere light goes up as its far-field point light (gpu_light); the methods
-        // that take one (pinhole) read its radius from the scene.
-        if let Some((i, l)) = scene
-            .lights
-            .iter()
-            .enumerate()
-            .find(|(_, l)| matches!(l, Light::Environment { .. }))
-        {
-            return Err(GpuError::Upload {
-                scene: scene.source.clone(),
-                message: format!(
-                    "lights[{i}] is an {} light: the GPU methods render point, spot, directional and (pinhole) sphere lights (the reference renders environments)",
-                    l.kind()
-                ),
-            });
-        }
+        // A sphere light goes up as its far-field point light, an environment as a
+        // black directional light (gpu_light): the methods that take them (pinhole)
+        // read their radius or map from the scene; the base passes draw no direct
+        // light from an environment.
         let device = &ctx.device;
         let mut vertices: Vec<SceneVertex> = Vec::new();
         let mut indices: Vec<u32> = Vec::new();

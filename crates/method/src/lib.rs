@@ -58,6 +58,8 @@ pub struct Capabilities {
     pub spot_light: bool,
     /// Sphere area lights (Lambertian spheres of given radiance).
     pub sphere_light: bool,
+    /// Environment lights (radiance by direction from infinitely far away).
+    pub environment_light: bool,
 }
 
 impl Capabilities {
@@ -73,6 +75,7 @@ impl Capabilities {
             (self.point_light, "point light"),
             (self.spot_light, "spot light"),
             (self.sphere_light, "sphere light"),
+            (self.environment_light, "environment light"),
         ];
         flags
             .iter()
@@ -97,11 +100,12 @@ impl Capabilities {
                     )));
                 }
                 Light::Sphere { .. } => (true, "sphere"),
-                Light::Environment { .. } => {
+                Light::Environment { .. } if !self.environment_light => {
                     return Err(Unsupported(format!(
-                        "lights[{i}] is an environment light: no GPU method here renders one yet (the reference does; Wand & Straßer's environment-map caustics, their Fig. 6, are the next step for pinhole)"
+                        "lights[{i}] is an environment light: this method's light leaves one point or one direction (its photons, beams or wavefront start there); pinhole renders environment maps (Wand & Straßer's Fig. 6)"
                     )));
                 }
+                Light::Environment { .. } => (true, "environment"),
             };
             if !ok {
                 return Err(Unsupported(format!(

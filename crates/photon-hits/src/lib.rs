@@ -251,6 +251,7 @@ pub const CAPABILITIES: Capabilities = Capabilities {
     point_light: true,
     spot_light: true,
     sphere_light: false,
+    environment_light: false,
 };
 
 /// Scene checks shared by both methods.

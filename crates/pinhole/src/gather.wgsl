@@ -147,6 +147,15 @@ fn sample_irradiance(i: u32, mode: u32, light: GpuLight, x: vec3<f32>, nx: vec3<
         let sl = sample_light[i];
         side = sl.w;
         radiance = sl.xyz;
+        if params.environment == 1u {
+            // The sky is on every side: through a mirror (or a Fresnel reflection) the
+            // light a receiver gets comes from the receiver's side, through an open
+            // surface from the other.
+            side = select(1.0, -1.0, dot(s.normal.xyz, to_x) < 0.0);
+            if mode == MODE_SURFACE_REFRACT {
+                side = -side;
+            }
+        }
     }
     // The normal on the receiver's side: the lit side of a mirror (or of a reflecting
     // dielectric), the far side of a surface the light refracts through (the outward
@@ -171,14 +180,19 @@ fn sample_irradiance(i: u32, mode: u32, light: GpuLight, x: vec3<f32>, nx: vec3<
     if path.lookup.w == 0.0 {
         return vec4<f32>(0.0);
     }
-    if mode == MODE_SPHERE_REFRACT {
+    let environment = params.environment == 1u;
+    if mode == MODE_SPHERE_REFRACT && environment {
+        // The sky's visibility along the exit direction is traced below.
+        radiance = vec3<f32>(path.transmit);
+    } else if mode == MODE_SPHERE_REFRACT {
         radiance = path.transmit * light_radiance(light, params, path.origin + 1e-4 * normalize(path.origin - objects[params.generator].p0.xyz), 0.0);
     } else {
         radiance *= path.transmit;
     }
     // Off the map's one face no footprint can reach the light (filtered_coverage), so
-    // the four neighbour paths of the filter are not traced for it.
-    if !on_light_face(path.lookup.xyz) {
+    // the four neighbour paths of the filter are not traced for it. (An environment's
+    // map covers every direction.)
+    if !environment && !on_light_face(path.lookup.xyz) {
         return vec4<f32>(0.0);
     }
     var gx = vec3<f32>(0.0);
@@ -199,12 +213,31 @@ fn sample_irradiance(i: u32, mode: u32, light: GpuLight, x: vec3<f32>, nx: vec3<
             neighbour_lookup(mode, light, x, din, p, r * t2, n2p, eta),
             neighbour_lookup(mode, light, x, din, p, -r * t2, n2m, eta));
     }
-    let fetched = filtered_coverage(path.lookup.xyz, gx, gy);
+    var light_rgb: vec3<f32>;
+    var probes: f32;
+    if environment {
+        let e = filtered_environment(path.lookup.xyz, gx, gy);
+        light_rgb = e.xyz * params.env_scale.xyz;
+        probes = e.w;
+    } else {
+        let c = filtered_coverage(path.lookup.xyz, gx, gy);
+        light_rgb = vec3<f32>(c.x);
+        probes = c.y;
+    }
     // Visibility last: the receiver-to-sample segment is traced (the scene's BVH) only
     // for the few pairs whose lookup lands on the light; most see none of it, and an
     // occluded pair adds nothing either way, so the image is the same as testing first.
-    if fetched.x == 0.0 {
-        return vec4<f32>(0.0, 0.0, 0.0, fetched.y);
+    if all(light_rgb == vec3<f32>(0.0)) {
+        return vec4<f32>(0.0, 0.0, 0.0, probes);
+    }
+    // An environment's light comes from infinitely far along the lookup direction:
+    // blocked if the ray leaving the generator there meets the scene (the paper tests
+    // no light visibility, §5; the point-light paths test theirs in prepare.wgsl).
+    if environment {
+        let sky = normalize(path.lookup.xyz);
+        if occluded(path.origin + sky * 1e-4, sky, NO_HIT, s.extra.y, 0.0) {
+            return vec4<f32>(0.0, 0.0, 0.0, probes);
+        }
     }
     // The segment from the (lifted) receiver point exactly to the sample; hits
     // within 1e-3 of its length from the sample are the sample's own surface.
@@ -212,9 +245,9 @@ fn sample_irradiance(i: u32, mode: u32, light: GpuLight, x: vec3<f32>, nx: vec3<
     let seg = p - x_start;
     let seg_len = length(seg);
     if occluded(x_start, seg / seg_len, seg_len, 0.0, max(s.extra.y, 1e-3 * seg_len)) {
-        return vec4<f32>(0.0, 0.0, 0.0, fetched.y);
+        return vec4<f32>(0.0, 0.0, 0.0, probes);
     }
-    return vec4<f32>(radiance * (fetched.x * cos_s * cos_x * s.pos.w / (d2 + s.normal.w)), fetched.y);
+    return vec4<f32>(radiance * light_rgb * (cos_s * cos_x * s.pos.w / (d2 + s.normal.w)), probes);
 }
 
 @fragment
@@ -306,6 +339,42 @@ fn filtered_coverage(v: vec3<f32>, gx: vec3<f32>, gy: vec3<f32>) -> vec2<f32> {
         sum += textureSampleLevel(light_map, light_sampler, c.xy + f * major, lod).r;
     }
     return vec2<f32>(sum / n, n);
+}
+
+// Lat-long coordinates of direction d (Mitsuba 3's convention, EnvironmentMap::uv).
+fn env_uv(d: vec3<f32>) -> vec2<f32> {
+    let n = normalize(d);
+    return vec2<f32>(atan2(n.x, -n.z) * (0.5 * INV_PI) + 0.5, acos(clamp(n.y, -1.0, 1.0)) * INV_PI);
+}
+
+// The environment map averaged over the footprint (centre direction v, edges gx, gy):
+// the same footprint assembly as filtered_coverage, in the map's (u, v), a footprint
+// across the seam at u = 0|1 taken the short way round (the sampler repeats in u).
+// Returns (rgb in units of the map's peak, probes taken).
+fn filtered_environment(v: vec3<f32>, gx: vec3<f32>, gy: vec3<f32>) -> vec4<f32> {
+    let c = env_uv(v);
+    let size = vec2<f32>(textureDimensions(light_map));
+    var du = env_uv(v + 0.5 * gx) - env_uv(v - 0.5 * gx);
+    var dv = env_uv(v + 0.5 * gy) - env_uv(v - 0.5 * gy);
+    du.x -= round(du.x);
+    dv.x -= round(dv.x);
+    let lx = length(du * size);
+    let ly = length(dv * size);
+    let major = select(dv, du, lx >= ly);
+    let p_max = max(lx, ly);
+    let p_min = min(lx, ly);
+    if p_max <= 1.0 {
+        return vec4<f32>(textureSampleLevel(light_map, light_sampler, c, 0.0).rgb, 1.0);
+    }
+    let n = clamp(ceil(p_max / max(p_min, 1e-6)), 1.0, MAX_ANISOTROPY);
+    let lod = log2(max(p_max / n, 1.0));
+    var sum = vec3<f32>(0.0);
+    let count = u32(n);
+    for (var i = 0u; i < count; i++) {
+        let f = (f32(i) + 0.5) / n - 0.5;
+        sum += textureSampleLevel(light_map, light_sampler, c + f * major, lod).rgb;
+    }
+    return vec4<f32>(sum / n, n);
 }
 
 // Adds to the 64-bit counter in counters[at] (low word) and counters[at + 1] (high).

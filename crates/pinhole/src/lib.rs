@@ -47,6 +47,11 @@
 //! facing the generator (its half angle atan(r/D) replaces `light_angle`), of radiance
 //! L/cos β: the sphere's, with its constant projected area. So pinhole renders extended
 //! sphere lights at no extra cost, as the paper says of extended lights (§5).
+//! An environment light (Fig. 6, "natural light") is its own lat-long map: the lookup
+//! is the direction leaving the generator, the map is filtered over the same footprint
+//! (in its (u, v), across the seam the short way), and the sky's visibility along that
+//! direction is traced per pair (the paper tests no light visibility, §5); the sky
+//! lights every side of a mirror, so the lit side is the receiver's ([`light_map`]).
 //!
 //! Supports one light of any kind and one caustic generator: a mirror of any shape
 //! (sphere, open cylinder as Wand's ring, quad, triangle mesh, heightfield), a
@@ -198,6 +203,7 @@ impl Method for Pinhole {
         point_light: true,
         spot_light: true,
         sphere_light: true,
+        environment_light: true,
     };
     const COUNTERS: &'static [CounterDoc] = COUNTER_DOCS;
 
@@ -337,12 +343,13 @@ struct GpuParams {
     mode: u32,
     filtering: u32,
     reflections: u32,
-    _pad: u32,
+    environment: u32,
     map_center: [f32; 4],
     map_axis: [f32; 4],
     map_u: [f32; 4],
     map_v: [f32; 4],
     light_scale: [f32; 4],
+    env_scale: [f32; 4],
 }
 
 /// The cube map's geometry for a light: centre, disc axis, disc radius (m; 0 for a
@@ -478,12 +485,13 @@ fn gpu_params(
         mode,
         filtering: params.filtering.code(),
         reflections: u32::from(params.reflections),
-        _pad: 0,
+        environment: 0,
         map_center: disc.center.extend(0.0).to_array(),
         map_axis: disc.axis.extend(disc.radius).to_array(),
         map_u: map_u.extend(0.0).to_array(),
         map_v: map_v.extend(0.0).to_array(),
         light_scale: [disc.radiance_per_power, disc.alpha.cos(), 0.0, 0.0],
+        env_scale: [0.0; 4],
     }
 }
 
@@ -594,7 +602,7 @@ impl Pinhole {
             params.light_angle as f32,
         );
         let sample_count = samples.len() as u32;
-        let gpu_params = gpu_params(params, generator as u32, mode.code(), sample_count, &disc);
+        let mut gpu_params = gpu_params(params, generator as u32, mode.code(), sample_count, &disc);
         let bvh = gpu_scene.triangle_bvh(ctx)?;
         // The samples (80 bytes each) and the light each sees (16 bytes), bound whole.
         let samples_memory = ctx
@@ -608,16 +616,23 @@ impl Pinhole {
                 message: e.to_string(),
             })?;
         let (buffers, map) = ctx.checked("pinhole setup", || {
+            // The light's map: an environment's own lat-long map, else the +Z face of
+            // the light's cube map, each with its mip chain.
+            let map = match &scene.lights[0] {
+                Light::Environment { map, scale } => {
+                    let (texture, peak) = LightMap::environment(ctx, map)?;
+                    gpu_params.environment = 1;
+                    gpu_params.env_scale = (*scale * peak).extend(0.0).to_array();
+                    texture
+                }
+                _ => LightMap::new(ctx, params.cube_size, disc.alpha)?,
+            };
             let buffers = Buffers::new(
                 &ctx.device,
                 &gpu_params,
                 &gpu_samples(&samples, params.epsilon_scale as f32),
             );
-            // The light's map (the +Z face of its cube map) with its mip chain.
-            Ok::<_, caustics_gpu::GpuError>((
-                buffers,
-                LightMap::new(ctx, params.cube_size, disc.alpha)?,
-            ))
+            Ok::<_, caustics_gpu::GpuError>((buffers, map))
         })??;
 
         let bvh_bindings: [(&str, &dyn caustics_gpu::pass::Bindable); 2] =
@@ -735,11 +750,13 @@ mod tests {
                 mode,
                 filtering,
                 reflections,
+                environment,
                 map_center,
                 map_axis,
                 map_u,
                 map_v,
-                light_scale
+                light_scale,
+                env_scale
             }
         );
     }

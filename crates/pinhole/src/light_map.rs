@@ -104,6 +104,115 @@ impl LightMap {
     }
 }
 
+impl LightMap {
+    /// An environment light's lat-long map (Mitsuba 3's convention, `EnvironmentMap`)
+    /// as an Rgba16Float texture with its mip chain (2×2 box means; an odd side keeps
+    /// its last column or row), divided by its peak so that any HDR map fits half
+    /// floats: the gather multiplies by [`LightMap::environment`]'s returned peak. The
+    /// sampler repeats in u (the seam at φ = ±π) and clamps in v (the poles).
+    pub fn environment(
+        ctx: &GpuContext,
+        map: &caustics_scene::EnvironmentMap,
+    ) -> Result<(Self, f32), GpuError> {
+        let (w, h) = (map.width, map.height);
+        let what = format!("the pinhole environment map ({w}x{h}, Rgba16Float with mips)");
+        ctx.limits
+            .texture(&what, w, h, "use a smaller environment map")?;
+        let memory = ctx.memory.reserve(
+            &what,
+            (u64::from(w) * u64::from(h) * 8 * 4).div_ceil(3),
+            "use a smaller environment map",
+        )?;
+        let peak = map
+            .pixels
+            .iter()
+            .map(|p| p.max_element())
+            .fold(0.0f32, f32::max)
+            .max(1e-30);
+        let mut levels = vec![(
+            w,
+            h,
+            map.pixels.iter().map(|p| *p / peak).collect::<Vec<_>>(),
+        )];
+        while let Some((lw, lh, prev)) = levels.last().filter(|(lw, lh, _)| *lw > 1 || *lh > 1) {
+            let (nw, nh) = ((lw / 2).max(1), (lh / 2).max(1));
+            let at = |x: u32, y: u32| prev[(y.min(lh - 1) * lw + x.min(lw - 1)) as usize];
+            let mut next = Vec::with_capacity((nw * nh) as usize);
+            for y in 0..nh {
+                for x in 0..nw {
+                    next.push(
+                        (at(2 * x, 2 * y)
+                            + at(2 * x + 1, 2 * y)
+                            + at(2 * x, 2 * y + 1)
+                            + at(2 * x + 1, 2 * y + 1))
+                            * 0.25,
+                    );
+                }
+            }
+            levels.push((nw, nh, next));
+        }
+        let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("pinhole environment map"),
+            size: wgpu::Extent3d {
+                width: w,
+                height: h,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: levels.len() as u32,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::Rgba16Float,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+            view_formats: &[],
+        });
+        let mut bytes = 0u64;
+        for (level, (lw, lh, data)) in levels.iter().enumerate() {
+            let texels: Vec<u8> = data
+                .iter()
+                .flat_map(|p| [p.x, p.y, p.z, 1.0])
+                .flat_map(|v| f16_bits(v).to_le_bytes())
+                .collect();
+            bytes += texels.len() as u64;
+            ctx.queue.write_texture(
+                wgpu::TexelCopyTextureInfo {
+                    texture: &texture,
+                    mip_level: level as u32,
+                    origin: wgpu::Origin3d::ZERO,
+                    aspect: wgpu::TextureAspect::All,
+                },
+                &texels,
+                wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(8 * lw),
+                    rows_per_image: Some(*lh),
+                },
+                wgpu::Extent3d {
+                    width: *lw,
+                    height: *lh,
+                    depth_or_array_layers: 1,
+                },
+            );
+        }
+        Ok((
+            Self {
+                view: texture.create_view(&wgpu::TextureViewDescriptor::default()),
+                sampler: ctx.device.create_sampler(&wgpu::SamplerDescriptor {
+                    label: Some("pinhole environment map"),
+                    address_mode_u: wgpu::AddressMode::Repeat,
+                    address_mode_v: wgpu::AddressMode::ClampToEdge,
+                    mag_filter: wgpu::FilterMode::Linear,
+                    min_filter: wgpu::FilterMode::Linear,
+                    mipmap_filter: wgpu::MipmapFilterMode::Linear,
+                    ..Default::default()
+                }),
+                bytes,
+                _memory: memory,
+            },
+            peak,
+        ))
+    }
+}
+
 /// Coverage of each texel of a `size`² map of the +Z face by the cone of half angle
 /// `alpha` (< 45°) around +Z, rows top first (t = −1 first); then each smaller mip
 /// level down to 1×1.

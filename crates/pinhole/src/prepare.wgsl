@@ -18,6 +18,12 @@ fn prepare_samples(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let s = samples[i];
+    // An environment lights every side, and its visibility depends on the direction a
+    // receiver looks up (the gather traces it).
+    if params.environment == 1u {
+        sample_light[i] = vec4<f32>(1.0, 1.0, 1.0, 1.0);
+        return;
+    }
     let light = lights[params.light_index];
     let o = s.pos.xyz;
     var to_light = -light.direction.xyz;

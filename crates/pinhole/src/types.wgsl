@@ -27,7 +27,9 @@ struct Params {
     filtering: u32,
     // 1: also the Fresnel reflection off a dielectric generator (`reflections`).
     reflections: u32,
-    pad1: u32,
+    // 1: the light is an environment: light_map holds its lat-long radiance (divided by
+    // its peak), env_scale its scale times that peak; the lookup is a direction.
+    environment: u32,
     // xyz: centre c of the cube map (point/spot: the generator's centre); w: unused.
     map_center: vec4<f32>,
     // xyz: axis of the light's disc in the map; w: disc radius rho (m, point/spot) or
@@ -39,6 +41,8 @@ struct Params {
     // x: radiance of the disc per unit power: 1/(pi rho²) (point/spot, per W/sr) or
     // 1/Omega (directional, per W/m²); y: cos(alpha) of the map's cone.
     light_scale: vec4<f32>,
+    // xyz: what an environment map's texels are multiplied by (its scale × peak).
+    env_scale: vec4<f32>,
 }
 
 const MODE_MIRROR: u32 = 0u;

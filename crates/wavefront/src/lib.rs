@@ -126,6 +126,7 @@ impl Method for Wavefront {
         point_light: true,
         spot_light: true,
         sphere_light: false,
+        environment_light: false,
     };
     const COUNTERS: &'static [CounterDoc] = COUNTER_DOCS;
 
