@@ -5,7 +5,7 @@
 # after), then `caustics animations` puts the sequences side by side (animations.md).
 #
 #   bench/animation.sh water_pool                       # 2 s at 30 FPS, 128x96
-#   bench/animation.sh scenes/extended/rolling_ball.json 0:1:30
+#   bench/animation.sh scenes/extended/moving_ball.json 0:1:30
 #   RESOLUTION=256x192 METHODS="wavefront splatting" OUT=/tmp/a bench/animation.sh water_pool
 #
 # References: 20 M photons per scored instant (seed 1), rendered into the cache on
