@@ -61,34 +61,16 @@ impl LightMap {
             usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
             view_formats: &[],
         });
-        let mut bytes = 0u64;
-        for (level, data) in levels.iter().enumerate() {
-            let w = (size >> level).max(1);
-            let texels: Vec<u8> = data
-                .iter()
-                .flat_map(|&v| f16_bits(v).to_le_bytes())
-                .collect();
-            bytes += texels.len() as u64;
-            ctx.queue.write_texture(
-                wgpu::TexelCopyTextureInfo {
-                    texture: &texture,
-                    mip_level: level as u32,
-                    origin: wgpu::Origin3d::ZERO,
-                    aspect: wgpu::TextureAspect::All,
-                },
-                &texels,
-                wgpu::TexelCopyBufferLayout {
-                    offset: 0,
-                    bytes_per_row: Some(2 * w),
-                    rows_per_image: Some(w),
-                },
-                wgpu::Extent3d {
-                    width: w,
-                    height: w,
-                    depth_or_array_layers: 1,
-                },
-            );
-        }
+        let bytes = upload_levels(
+            ctx,
+            &texture,
+            2,
+            levels.iter().enumerate().map(|(level, data)| {
+                let w = (size >> level).max(1);
+                let texels = data.iter().flat_map(|&v| f16_bits(v).to_le_bytes());
+                (w, w, texels.collect())
+            }),
+        );
         Ok(Self {
             view: texture.create_view(&wgpu::TextureViewDescriptor::default()),
             sampler: ctx.device.create_sampler(&wgpu::SamplerDescriptor {
@@ -165,34 +147,18 @@ impl LightMap {
             usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
             view_formats: &[],
         });
-        let mut bytes = 0u64;
-        for (level, (lw, lh, data)) in levels.iter().enumerate() {
-            let texels: Vec<u8> = data
-                .iter()
-                .flat_map(|p| [p.x, p.y, p.z, 1.0])
-                .flat_map(|v| f16_bits(v).to_le_bytes())
-                .collect();
-            bytes += texels.len() as u64;
-            ctx.queue.write_texture(
-                wgpu::TexelCopyTextureInfo {
-                    texture: &texture,
-                    mip_level: level as u32,
-                    origin: wgpu::Origin3d::ZERO,
-                    aspect: wgpu::TextureAspect::All,
-                },
-                &texels,
-                wgpu::TexelCopyBufferLayout {
-                    offset: 0,
-                    bytes_per_row: Some(8 * lw),
-                    rows_per_image: Some(*lh),
-                },
-                wgpu::Extent3d {
-                    width: *lw,
-                    height: *lh,
-                    depth_or_array_layers: 1,
-                },
-            );
-        }
+        let bytes = upload_levels(
+            ctx,
+            &texture,
+            8,
+            levels.iter().map(|(lw, lh, data)| {
+                let texels = data
+                    .iter()
+                    .flat_map(|p| [p.x, p.y, p.z, 1.0])
+                    .flat_map(|v| f16_bits(v).to_le_bytes());
+                (*lw, *lh, texels.collect())
+            }),
+        );
         Ok((
             Self {
                 view: texture.create_view(&wgpu::TextureViewDescriptor::default()),
@@ -211,6 +177,40 @@ impl LightMap {
             peak,
         ))
     }
+}
+
+/// Writes each mip level (width, height, texel bytes) of `texture`, level 0 first;
+/// returns the bytes written.
+fn upload_levels(
+    ctx: &GpuContext,
+    texture: &wgpu::Texture,
+    bytes_per_texel: u32,
+    levels: impl Iterator<Item = (u32, u32, Vec<u8>)>,
+) -> u64 {
+    let mut bytes = 0u64;
+    for (level, (w, h, texels)) in levels.enumerate() {
+        bytes += texels.len() as u64;
+        ctx.queue.write_texture(
+            wgpu::TexelCopyTextureInfo {
+                texture,
+                mip_level: level as u32,
+                origin: wgpu::Origin3d::ZERO,
+                aspect: wgpu::TextureAspect::All,
+            },
+            &texels,
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(bytes_per_texel * w),
+                rows_per_image: Some(h),
+            },
+            wgpu::Extent3d {
+                width: w,
+                height: h,
+                depth_or_array_layers: 1,
+            },
+        );
+    }
+    bytes
 }
 
 /// Coverage of each texel of a `size`² map of the +Z face by the cone of half angle

@@ -414,18 +414,7 @@ impl Emitter {
                 cones,
                 cdf,
             } => {
-                let c = &cones[pick(cdf, u0)];
-                let cos_t = 1.0 - u[1] * (1.0 - c.cos_max);
-                let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
-                let phi = TAU * u[2];
-                let dir =
-                    (cos_t * c.axis + sin_t * (phi.cos() * c.b1 + phi.sin() * c.b2)).normalize();
-                let count = cones
-                    .iter()
-                    .filter(|o| dir.dot(o.axis) >= o.cos_max)
-                    .count()
-                    .max(1);
-                let omega_total = cdf.last().copied().unwrap_or(0.0);
+                let (dir, count, omega_total) = in_cones(cones, cdf, u0, u[1], u[2]);
                 Photon {
                     origin: *position,
                     dir,
@@ -449,18 +438,8 @@ impl Emitter {
                     .map(|(c, r, b)| aim_cone(origin, *c, *r, b))
                     .collect();
                 let cdf = cumulative(cones.iter().map(Cone::solid_angle));
-                let c = &cones[pick(&cdf, u[3])];
-                let cos_t = 1.0 - more() * (1.0 - c.cos_max);
-                let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
-                let phi = TAU * more();
-                let dir =
-                    (cos_t * c.axis + sin_t * (phi.cos() * c.b1 + phi.sin() * c.b2)).normalize();
-                let count = cones
-                    .iter()
-                    .filter(|o| dir.dot(o.axis) >= o.cos_max)
-                    .count()
-                    .max(1);
-                let omega_total = cdf.last().copied().unwrap_or(0.0);
+                let (u1, u2) = (more(), more());
+                let (dir, count, omega_total) = in_cones(&cones, &cdf, u[3], u1, u2);
                 let area = 4.0 * PI * radius * radius;
                 let cos_out = normal.dot(dir).max(0.0);
                 Photon {
@@ -518,6 +497,23 @@ impl Emitter {
         photon.power /= p_light;
         photon
     }
+}
+
+/// A direction uniform in the union of `cones` (one picked by `u_pick` ∝ its solid
+/// angle, then uniform in it by `u1`, `u2`), the number of cones holding it, and the
+/// union's summed solid angle: pdf(ω) = count / Σ Ω.
+fn in_cones(cones: &[Cone], cdf: &[f32], u_pick: f32, u1: f32, u2: f32) -> (Vec3, usize, f32) {
+    let c = &cones[pick(cdf, u_pick)];
+    let cos_t = 1.0 - u1 * (1.0 - c.cos_max);
+    let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
+    let phi = TAU * u2;
+    let dir = (cos_t * c.axis + sin_t * (phi.cos() * c.b1 + phi.sin() * c.b2)).normalize();
+    let count = cones
+        .iter()
+        .filter(|o| dir.dot(o.axis) >= o.cos_max)
+        .count()
+        .max(1);
+    (dir, count, cdf.last().copied().unwrap_or(0.0))
 }
 
 /// Radius of the disc ⟂ `dir` around the projection of (`c`, `r`, box `b`): the
