@@ -77,15 +77,8 @@ impl Cone {
 #[derive(Clone, Debug)]
 enum Sampler {
     Directional {
-        dir: Vec3,
-        b1: Vec3,
-        b2: Vec3,
         irradiance: Vec3,
-        /// Distance along `dir` of a plane before the whole scene (photons start there).
-        start: f32,
-        discs: Vec<Disc>,
-        /// Cumulative disc areas.
-        cdf: Vec<f32>,
+        crossing: Crossing,
     },
     Point {
         position: Vec3,
@@ -250,32 +243,12 @@ impl Emitter {
                     direction,
                     irradiance,
                 } => {
-                    let dir = direction.normalize();
-                    let (b1, b2) = perpendicular_frame(dir);
-                    let discs: Vec<Disc> = spheres
-                        .iter()
-                        .map(|(c, r, b)| Disc {
-                            center: *c - c.dot(dir) * dir,
-                            radius: disc_radius(dir, *c, *r, b),
-                        })
-                        .collect();
-                    let cdf = cumulative(discs.iter().map(|d| PI * d.radius * d.radius));
-                    let start = bounds
-                        .corners()
-                        .iter()
-                        .map(|k| k.dot(dir))
-                        .fold(f32::INFINITY, f32::min)
-                        - 1.0;
-                    let w = irradiance.element_sum() / 3.0 * cdf.last().copied().unwrap_or(0.0);
+                    let crossing = Crossing::new(direction.normalize(), &spheres, &bounds);
+                    let w = irradiance.element_sum() / 3.0 * crossing.area();
                     (
                         Sampler::Directional {
-                            dir,
-                            b1,
-                            b2,
                             irradiance: *irradiance,
-                            start,
-                            discs,
-                            cdf,
+                            crossing,
                         },
                         w,
                     )
@@ -383,28 +356,14 @@ impl Emitter {
         };
         let mut photon = match &self.samplers[li] {
             Sampler::Directional {
-                dir,
-                b1,
-                b2,
                 irradiance,
-                start,
-                discs,
-                cdf,
+                crossing,
             } => {
-                let d = &discs[pick(cdf, u0)];
-                let r = d.radius * u[1].sqrt();
-                let phi = TAU * u[2];
-                let x = d.center + r * (phi.cos() * *b1 + phi.sin() * *b2);
-                let count = discs
-                    .iter()
-                    .filter(|o| (x - o.center).length_squared() <= o.radius * o.radius)
-                    .count()
-                    .max(1);
-                let area_total = cdf.last().copied().unwrap_or(0.0);
+                let (origin, per_area) = crossing.sample(u0, u[1], u[2]);
                 Photon {
-                    origin: x + *start * *dir,
-                    dir: *dir,
-                    power: *irradiance * (area_total / count as f32),
+                    origin,
+                    dir: crossing.dir,
+                    power: *irradiance * per_area,
                 }
             }
             Sampler::Point {
@@ -459,38 +418,13 @@ impl Emitter {
                         power: Vec3::ZERO,
                     };
                 };
-                let dir = -sky;
-                let (b1, b2) = perpendicular_frame(dir);
-                let discs: Vec<Disc> = env
-                    .targets
-                    .iter()
-                    .map(|(c, r, b)| Disc {
-                        center: *c - c.dot(dir) * dir,
-                        radius: disc_radius(dir, *c, *r, b),
-                    })
-                    .collect();
-                let cdf = cumulative(discs.iter().map(|d| PI * d.radius * d.radius));
-                let d = &discs[pick(&cdf, more())];
-                let r = d.radius * more().sqrt();
-                let phi = TAU * more();
-                let x = d.center + r * (phi.cos() * b1 + phi.sin() * b2);
-                let count = discs
-                    .iter()
-                    .filter(|o| (x - o.center).length_squared() <= o.radius * o.radius)
-                    .count()
-                    .max(1);
-                let area_total = cdf.last().copied().unwrap_or(0.0);
-                let start = env
-                    .bounds
-                    .corners()
-                    .iter()
-                    .map(|k| k.dot(dir))
-                    .fold(f32::INFINITY, f32::min)
-                    - 1.0;
+                let crossing = Crossing::new(-sky, &env.targets, &env.bounds);
+                let (u1, u2, u3) = (more(), more(), more());
+                let (origin, per_area) = crossing.sample(u1, u2, u3);
                 Photon {
-                    origin: x + start * dir,
-                    dir,
-                    power: env.map.pixels[pixel] * env.scale * (area_total / count as f32 / pdf),
+                    origin,
+                    dir: crossing.dir,
+                    power: env.map.pixels[pixel] * env.scale * (per_area / pdf),
                 }
             }
         };
@@ -514,6 +448,70 @@ fn in_cones(cones: &[Cone], cdf: &[f32], u_pick: f32, u1: f32, u2: f32) -> (Vec3
         .count()
         .max(1);
     (dir, count, cdf.last().copied().unwrap_or(0.0))
+}
+
+/// Parallel photons along `dir` through the union of discs ⟂ `dir` around the targets
+/// (directional lights, and an environment's drawn direction): a point uniform on the
+/// union, started on a plane 1 m before the whole scene.
+#[derive(Clone, Debug)]
+struct Crossing {
+    dir: Vec3,
+    b1: Vec3,
+    b2: Vec3,
+    /// Distance along `dir` of the start plane.
+    start: f32,
+    discs: Vec<Disc>,
+    /// Cumulative disc areas.
+    cdf: Vec<f32>,
+}
+
+impl Crossing {
+    fn new(dir: Vec3, targets: &[(Vec3, f32, Aabb)], bounds: &Aabb) -> Crossing {
+        let (b1, b2) = perpendicular_frame(dir);
+        let discs: Vec<Disc> = targets
+            .iter()
+            .map(|(c, r, b)| Disc {
+                center: *c - c.dot(dir) * dir,
+                radius: disc_radius(dir, *c, *r, b),
+            })
+            .collect();
+        let cdf = cumulative(discs.iter().map(|d| PI * d.radius * d.radius));
+        let start = bounds
+            .corners()
+            .iter()
+            .map(|k| k.dot(dir))
+            .fold(f32::INFINITY, f32::min)
+            - 1.0;
+        Crossing {
+            dir,
+            b1,
+            b2,
+            start,
+            discs,
+            cdf,
+        }
+    }
+
+    /// Σ disc areas (m²).
+    fn area(&self) -> f32 {
+        self.cdf.last().copied().unwrap_or(0.0)
+    }
+
+    /// A start point (a disc picked by `u_pick` ∝ its area, uniform in it by `u1`,
+    /// `u2`) and 1/pdf per unit irradiance: Σ areas / (discs holding the point).
+    fn sample(&self, u_pick: f32, u1: f32, u2: f32) -> (Vec3, f32) {
+        let d = &self.discs[pick(&self.cdf, u_pick)];
+        let r = d.radius * u1.sqrt();
+        let phi = TAU * u2;
+        let x = d.center + r * (phi.cos() * self.b1 + phi.sin() * self.b2);
+        let count = self
+            .discs
+            .iter()
+            .filter(|o| (x - o.center).length_squared() <= o.radius * o.radius)
+            .count()
+            .max(1);
+        (x + self.start * self.dir, self.area() / count as f32)
+    }
 }
 
 /// Radius of the disc ⟂ `dir` around the projection of (`c`, `r`, box `b`): the
