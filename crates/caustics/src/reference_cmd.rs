@@ -32,6 +32,10 @@ pub struct ReferenceArgs {
     /// `"time"`); the cache keys the instant, so `caustics run --time` finds it.
     #[arg(long, value_name = "SECONDS")]
     pub time: Option<f32>,
+    /// Render at this camera resolution instead of the scene file's (`WIDTHxHEIGHT`);
+    /// the cache keys the resolution, so `caustics run --resolution` finds it.
+    #[arg(long, value_name = "WxH")]
+    pub resolution: Option<String>,
     /// Output folder (default: the reference cache, where `caustics run` finds it).
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
@@ -130,8 +134,16 @@ pub fn reference(args: &ReferenceArgs) -> Result<()> {
         return bench(args);
     }
     let name = args.scene.as_deref().context("--scene is required")?;
+    let resolution = args
+        .resolution
+        .as_deref()
+        .map(crate::run::parse_resolution)
+        .transpose()?;
     let path = caustics_scene::resolve(name)?;
-    let scene = Scene::load_with_limits(&path, &args.limits.limits())?;
+    let mut scene = Scene::load_with_limits(&path, &args.limits.limits())?;
+    if let Some((w, h)) = resolution {
+        (scene.camera.width, scene.camera.height) = (w, h);
+    }
     let scene = match args.time {
         Some(t) => scene
             .at_time(t)

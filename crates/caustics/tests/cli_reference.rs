@@ -50,6 +50,14 @@ fn bad_reference_options_fail_clearly() {
             vec!["--scene", "ring", "--photons", "10", "--seconds", "1"],
             "cannot be used with",
         ),
+        (
+            vec!["--scene", "ring", "--photons", "10", "--resolution", "0x48"],
+            "--resolution",
+        ),
+        (
+            vec!["--scene", "ring", "--photons", "10", "--resolution", "64"],
+            "WIDTHxHEIGHT",
+        ),
     ] {
         let mut all = vec!["reference", "--references", refs];
         all.extend(args.iter());
@@ -192,6 +200,63 @@ fn a_rendered_reference_is_cached_and_used_by_run() {
             .join("wavefront")
             .join("error.png")
             .is_file()
+    );
+}
+
+/// `--resolution` renders the reference at another camera size, into the cache folder
+/// a `caustics run --resolution` of the same size looks in: no scene file to copy.
+#[test]
+fn a_reference_at_another_resolution_is_found_by_a_run_at_it() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let refs = tmp.path().join("refs");
+    let refs_s = refs.to_str().expect("utf-8");
+    let o = caustics(&[
+        "reference",
+        "--scene",
+        "ring",
+        "--resolution",
+        "32x24",
+        "--photons",
+        "100000",
+        "--references",
+        refs_s,
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let mut scene = caustics_scene::Scene::load(&caustics_scene::resolve("ring").expect("ring"))
+        .expect("scene");
+    (scene.camera.width, scene.camera.height) = (32, 24);
+    let cached = caustics::references::find(&refs, &scene)
+        .expect("valid cache")
+        .expect("the 32x24 reference is in the cache");
+    assert_eq!((cached.meta.width, cached.meta.height), (32, 24));
+    let image = caustics_metrics::read_exr(&cached.dir.join("caustic.exr")).expect("exr");
+    assert_eq!((image.width, image.height), (32, 24));
+
+    let out = tmp.path().join("out");
+    let o = caustics(&[
+        "run",
+        "--scene",
+        "ring",
+        "--resolution",
+        "32x24",
+        "--method",
+        "wavefront",
+        "--frames",
+        "1",
+        "--warmup",
+        "0",
+        "--quick-reference-photons",
+        "0",
+        "--references",
+        refs_s,
+        "--out",
+        out.to_str().expect("utf-8"),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("using cached reference"),
+        "{}",
+        stderr(&o)
     );
 }
 
