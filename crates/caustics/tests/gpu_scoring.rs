@@ -155,6 +155,7 @@ fn a_scored_run_keeps_pixel_averaged_and_1spp_errors_side_by_side() {
         photons: Some(1 << 20),
         seconds: None,
         time: None,
+        resolution: None,
         out: None,
         references: references.clone(),
         seed: 1,
