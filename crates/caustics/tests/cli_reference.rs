@@ -160,27 +160,7 @@ fn a_rendered_reference_is_cached_and_used_by_run() {
     assert!(meta.meta.relative_stderr > 0.0 && meta.meta.relative_stderr.is_finite());
 
     let out = tmp.path().join("out");
-    let o = caustics(&[
-        "run",
-        "--scene",
-        &scene,
-        "--method",
-        "wavefront",
-        "--frames",
-        "1",
-        "--warmup",
-        "0",
-        "--references",
-        refs_s,
-        "--out",
-        out.to_str().expect("utf-8"),
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
-    assert!(
-        stderr(&o).contains("using cached reference"),
-        "{}",
-        stderr(&o)
-    );
+    run_from_the_cache(&["--scene", &scene], refs_s, &out);
     let result: serde_json::Value = serde_json::from_slice(
         &std::fs::read(out.join("water_pool").join("wavefront").join("result.json"))
             .expect("result.json"),
@@ -232,26 +212,36 @@ fn a_reference_at_another_resolution_is_found_by_a_run_at_it() {
     let image = caustics_metrics::read_exr(&cached.dir.join("caustic.exr")).expect("exr");
     assert_eq!((image.width, image.height), (32, 24));
 
-    let out = tmp.path().join("out");
-    let o = caustics(&[
+    run_from_the_cache(
+        &["--scene", "ring", "--resolution", "32x24"],
+        refs_s,
+        &tmp.path().join("out"),
+    );
+}
+
+/// One wavefront frame of the scene `scene_args` name, into `out`, which must be scored
+/// against a reference found in the cache at `refs` (none is rendered for it).
+fn run_from_the_cache(scene_args: &[&str], refs: &str, out: &Path) {
+    let mut args = vec![
         "run",
-        "--scene",
-        "ring",
-        "--resolution",
-        "32x24",
         "--method",
         "wavefront",
         "--frames",
         "1",
         "--warmup",
         "0",
+    ];
+    args.extend(scene_args);
+    let out = out.to_str().expect("utf-8");
+    args.extend([
         "--quick-reference-photons",
         "0",
         "--references",
-        refs_s,
+        refs,
         "--out",
-        out.to_str().expect("utf-8"),
+        out,
     ]);
+    let o = caustics(&args);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(
         stderr(&o).contains("using cached reference"),
