@@ -239,3 +239,26 @@ fn scoring_keeps_the_centre_refinement_and_nearly_matches_refining_per_offset() 
     assert!(l1 / b < 0.05, "L1 difference {l1} against flux {b}");
     assert_eq!(reused.direct.pixels, each.direct.pixels);
 }
+
+/// Several lights: a ball under two suns renders the sum of the ball under each sun
+/// alone, each light refined within its own beam budget (the budget is set low enough
+/// here to bind, so a budget shared between the lights would show), counters summed.
+#[test]
+fn adaptive_beams_lights_add_up() {
+    let measured = caustics_testing::lights::lights_add_up(
+        &caustics_method::registry_entry::<adaptive_beams::AdaptiveBeams>(),
+        small(serde_json::json!({"beam_budget": 600})),
+        &[
+            "beams",
+            "base_triangles",
+            "candidates",
+            "splits_deferred",
+            "beams_level_2",
+        ],
+    );
+    assert!(
+        measured.counter("splits_deferred") > 0,
+        "the budget does not bind: {:?}",
+        measured.counters
+    );
+}

@@ -118,14 +118,15 @@ pub(crate) const CONTROL: &[Word] = &[
 ];
 
 /// What each counter of both beam methods counts (`static-grid` and `adaptive-beams`
-/// report the same set): the control words read back after the frame (the generate
-/// pass of the last frame, the count frame), then the two that `BeamMethod::counters`
-/// derives and the two of the compute rasterizer (`raster = compute`). A test checks
-/// that every counter they can report is here, and nothing else.
+/// report the same set, summed over the scene's lights but `levels_run`): the control
+/// words read back after the frame (the generate pass of the last frame, the count
+/// frame), then the two that `BeamMethod::counters` derives and the two of the compute
+/// rasterizer (`raster = compute`). A test checks that every counter they can report is
+/// here, and nothing else.
 #[rustfmt::skip]
 pub const COUNTER_DOCS: &[CounterDoc] = &[
-    CounterDoc { name: "base_triangles", doc: "triangles of the unrefined projected grid in the light's view, 2 per cell (2 x grid^2); set by the parameters, not counted on the GPU" },
-    CounterDoc { name: "beams", doc: "beams written in the last frame's generate pass and rasterized as hulls, over all refinement levels and light-path families (after splitting and dropping; at most max_beams)" },
+    CounterDoc { name: "base_triangles", doc: "triangles of the unrefined projected grid in each light's view, 2 per cell and light (2 x grid^2 x lights); set by the parameters, not counted on the GPU" },
+    CounterDoc { name: "beams", doc: "beams written in the last frame's generate pass and rasterized as hulls, over all refinement levels, light-path families and lights (after splitting and dropping; at most max_beams per light)" },
     CounterDoc { name: "beams_level_N", doc: "beams written from leaves at refinement level N (0: the unrefined grid; one counter per level run), all families; they add up to beams" },
     CounterDoc { name: "beams_path_main", doc: "beams written of the main light path (refracted through each dielectric, reflected off mirrors: the paper's path)" },
     CounterDoc { name: "beams_path_fresnel_reflection", doc: "beams written of the Fresnel reflection off a dielectric's first interface (reflections = true; 0 without dielectrics)" },

@@ -63,7 +63,8 @@ pub(crate) struct BeamUniforms {
     split_hit_rel: f32,
     beam_budget: u32,
     splat_orphans: u32,
-    _pad: [u32; 2],
+    light_index: u32,
+    _pad: u32,
 }
 
 /// Mirrors `FilterUniforms` in filter.wgsl.
@@ -177,12 +178,13 @@ pub(crate) fn slots(scene: &Scene, gpu_scene: &GpuScene) -> Vec<Slot> {
 }
 
 impl BeamUniforms {
-    /// The uniforms of `config` for the scene seen through the light `view`, the
+    /// The uniforms of `config` for the scene's light `light_index` and its `view`, the
     /// generators `slots` and their impostors in `atlas` (the slots in order, then
     /// the receivers).
     pub(crate) fn new(
         scene: &Scene,
         config: &BeamConfig,
+        light_index: usize,
         view: &LightView,
         slots: &[Slot],
         atlas: &ImpostorAtlas,
@@ -199,20 +201,15 @@ impl BeamUniforms {
             };
         }
         let bounds = scene.bounds();
-        let (light_dir_kind, light_pos_start, power) = match scene.lights[0] {
+        let (light_dir_kind, light_pos_start, power) = match scene.lights[light_index] {
             Light::Directional {
                 direction,
                 irradiance,
             } => {
                 let dir = direction.normalize();
-                // The reference starts directional photons 1 m before the scene's
-                // bounds along the light; extinction is counted from the same plane.
-                let start = bounds
-                    .corners()
-                    .iter()
-                    .map(|c| c.dot(dir))
-                    .fold(f32::INFINITY, f32::min)
-                    - 1.0;
+                // Extinction is counted from the plane the reference starts its
+                // directional photons on.
+                let start = bounds.directional_start(dir);
                 let side = view.texel_size * view.resolution as f32;
                 (
                     dir.extend(0.0),
@@ -284,7 +281,8 @@ impl BeamUniforms {
             split_hit_rel: r.split_hit_rel as f32,
             beam_budget: if r.levels > 0 { r.beam_budget } else { 0 },
             splat_orphans: u32::from(b.splat_orphans),
-            _pad: [0; 2],
+            light_index: light_index as u32,
+            _pad: 0,
         }
     }
 }
@@ -341,6 +339,7 @@ mod tests {
                 split_hit_rel,
                 beam_budget,
                 splat_orphans,
+                light_index,
             }
         );
         assert_wgsl_layout!(

@@ -88,11 +88,16 @@
 //!   is the same on every run and within a stated bound of the hardware path's
 //!   (`tests/gpu_beams.rs`); orphan points stay on the rasterizer.
 //!
-//! Passes (names `<method>/<pass>`): `light_gbuffer`, `impostors`, `generate` (compute:
-//! `init_grid`, then per level `decide`, `budget` (with a beam budget), `scan`, `emit`,
-//! `advance`, then `finalize`),
-//! `rasterize` (the hulls, one indirect draw; with `raster` = compute one indirect
-//! dispatch, then `resolve`), `orphan_points` (with `splat_orphans`, one indirect draw)
+//! - the paper builds the beams of one light; a scene with several gets the pipeline
+//!   once per light, each as if alone (its own light view and G-buffer, grid, refinement
+//!   and beam budget), into the same images ([`BeamMethod`]); counters are summed over
+//!   the lights.
+//!
+//! Passes (names `<method>/<pass>`): `light_gbuffer` (one per light), `impostors`,
+//! `generate` (compute: per light `init_grid`, then per level `decide`, `budget` (with a
+//! beam budget), `scan`, `emit`, `advance`, then `finalize`), `rasterize` (the hulls, one
+//! indirect draw per light; with `raster` = compute one indirect dispatch per light,
+//! then `resolve`), `orphan_points` (with `splat_orphans`, one indirect draw per light)
 //! and `surface_filter`.
 
 pub mod config;
@@ -200,11 +205,8 @@ pub const CAPABILITIES: Capabilities = Capabilities {
 
 /// Scene limits of the beam pipeline beyond [`CAPABILITIES`].
 pub fn check_scene(scene: &Scene) -> Result<(), Unsupported> {
-    if scene.lights.len() != 1 {
-        return Err(Unsupported(format!(
-            "needs exactly one light (the light G-buffer is one view), the scene has {}",
-            scene.lights.len()
-        )));
+    if scene.lights.is_empty() {
+        return Err(Unsupported("the scene has no light".into()));
     }
     let specular = scene
         .objects
@@ -228,12 +230,14 @@ pub fn check_scene(scene: &Scene) -> Result<(), Unsupported> {
             "the scene has no diffuse receiver for the caustic".into(),
         ));
     }
-    if let Some(b) = scene.specular_bounds()
-        && LightView::fit_points(&scene.lights[0], &b.corners(), 16).is_none()
-    {
-        return Err(Unsupported(
-            "the light is among the specular objects; the light G-buffer must see them from outside".into(),
-        ));
+    if let Some(b) = scene.specular_bounds() {
+        for (l, light) in scene.lights.iter().enumerate() {
+            if LightView::fit_points(light, &b.corners(), 16).is_none() {
+                return Err(Unsupported(format!(
+                    "lights[{l}] is among the specular objects; its light G-buffer must see them from outside"
+                )));
+            }
+        }
     }
     Ok(())
 }
@@ -254,21 +258,42 @@ const ACCUM_WORDS_PER_PIXEL: u64 = 6 * shader::FIXED_POINT_WORDS;
 const RASTER_COUNTS_BYTES: u64 = 16;
 
 /// The beam pipeline bound to one scene.
+///
+/// The paper builds the beams of one light. A scene with several gets the paper's
+/// pipeline once per light, as if each were alone (its own light view, G-buffer, grid,
+/// refinement and beam budget), into the same images: beams of different lights never
+/// interact, so the caustic is the sum of each light's (the superposition the
+/// reference's photons obey too). The passes are shared: each light binds its own
+/// group 1 (and the generate pass's group 2) inside them.
 pub struct BeamMethod {
     config: BeamConfig,
-    light_gbuffer: GBuffer,
     impostor_pass: ImpostorPass,
     atlas: ImpostorAtlas,
     buffers: Buffers,
+    /// One per scene light, in the scene's order.
+    lights: Vec<LightBeams>,
     generate: ComputePass,
-    /// Group 2 of `generate`: the indirect arguments, for the kernels that write them.
-    args: wgpu::BindGroup,
     rasterize: HullRaster,
     /// With `splat_orphans`: the landed corners of the families leaves drop, as points.
     orphan_points: Option<RasterPass>,
     surface_filter: RasterPass,
     pass_names: PassNames,
     bytes: u64,
+}
+
+/// One light's beams: its light G-buffer, what its beams are written to, and its bind
+/// groups of the shared passes.
+struct LightBeams {
+    light_gbuffer: GBuffer,
+    buffers: LightBuffers,
+    /// Group 1 of `generate`.
+    generate_group: wgpu::BindGroup,
+    /// Group 2 of `generate`: the indirect arguments, for the kernels that write them.
+    args: wgpu::BindGroup,
+    /// Group 1 of the hull rasterization (hardware or compute).
+    raster_group: wgpu::BindGroup,
+    /// Group 1 of `orphan_points` (with `splat_orphans`).
+    orphan_group: Option<wgpu::BindGroup>,
 }
 
 /// How the hulls reach the image (`raster`).
@@ -280,21 +305,23 @@ enum HullRaster {
     Compute {
         rasterize: ComputePass,
         resolve: RasterPass,
-        /// `raster_pairs_shaded`, `raster_pairs_lit` (64-bit): cleared each frame.
+        /// `raster_pairs_shaded`, `raster_pairs_lit` (64-bit): cleared each frame,
+        /// added to by every light's beams.
         counts: wgpu::Buffer,
-        _accumulator: wgpu::Buffer,
+        /// Every light's beams add into it; the one resolve writes their sum.
+        accumulator: wgpu::Buffer,
         _memory: Reservation,
     },
 }
 
 impl HullRaster {
-    /// The passes `raster` asks for, and the bytes they hold beyond `b`.
+    /// The passes `raster` asks for, and the bytes they hold; group 1 is each light's
+    /// ([`HullRaster::light_group`]).
     fn build(
         ctx: &GpuContext,
         renderer: &Renderer,
         config: &BeamConfig,
         name: &'static str,
-        b: &Buffers,
     ) -> Result<(Self, u64), MethodError> {
         match config.beams.raster {
             Raster::Hardware => {
@@ -302,7 +329,7 @@ impl HullRaster {
                 let pass =
                     RasterPass::builder(ctx, &format!("{name}/rasterize"), &shader, "vs_beam")
                         .frame(renderer)
-                        .bind(1, &[("u", &b.uniforms), ("beams", &b.beams)])
+                        .caller_group(1)
                         .fragment(
                             "fs_beam",
                             &[Some(additive_hdr_target()), Some(additive_hdr_target())],
@@ -367,16 +394,7 @@ impl HullRaster {
                 )?;
                 let rasterize = ComputePass::builder(ctx, &format!("{name}/rasterize"), &shader)
                     .frame(renderer)
-                    .bind(
-                        1,
-                        &[
-                            ("u", &b.uniforms),
-                            ("beams", &b.beams),
-                            ("control", &b.control),
-                            ("accum", &accumulator),
-                            ("raster_counts", &counts),
-                        ],
-                    )
+                    .caller_group(1)
                     .kernels(&["rasterize"])
                     .build()?;
                 let shader = Shader::new(ctx, "beams resolve.wgsl", resolve_source())?;
@@ -395,12 +413,39 @@ impl HullRaster {
                         rasterize,
                         resolve,
                         counts,
-                        _accumulator: accumulator,
+                        accumulator,
                         _memory: memory,
                     },
                     bytes + RASTER_COUNTS_BYTES,
                 ))
             }
+        }
+    }
+
+    /// Group 1 of the rasterization for one light's beams.
+    fn light_group(
+        &self,
+        device: &wgpu::Device,
+        light: &LightBuffers,
+    ) -> Result<wgpu::BindGroup, GpuError> {
+        match self {
+            Self::Hardware(pass) => group_one(pass.name(), pass.schema(1))?
+                .bind(device, &[("u", &light.uniforms), ("beams", &light.beams)]),
+            Self::Compute {
+                rasterize,
+                counts,
+                accumulator,
+                ..
+            } => group_one(rasterize.name(), rasterize.schema(1))?.bind(
+                device,
+                &[
+                    ("u", &light.uniforms),
+                    ("beams", &light.beams),
+                    ("control", &light.control),
+                    ("accum", accumulator),
+                    ("raster_counts", counts),
+                ],
+            ),
         }
     }
 }
@@ -410,25 +455,118 @@ struct PassNames {
     impostors: String,
 }
 
-/// The buffers of beam generation, sized by `max_beams`, and the raw surface caustic.
+/// Group 1 of the pass `pass`: each light's resources, bound by the caller.
+fn group_one<'a>(
+    pass: &str,
+    schema: Option<&'a caustics_gpu::pass::BindGroupSchema>,
+) -> Result<&'a caustics_gpu::pass::BindGroupSchema, GpuError> {
+    schema.ok_or_else(|| GpuError::Invalid(format!("pass {pass}: no group 1")))
+}
+
+/// A uniform buffer holding `contents`.
+fn uniform_buffer(device: &wgpu::Device, label: &str, contents: &[u8]) -> wgpu::Buffer {
+    device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some(label),
+        contents,
+        usage: wgpu::BufferUsages::UNIFORM,
+    })
+}
+
+/// A storage buffer of `size` bytes (at least 16), with `extra` usages.
+fn storage_buffer(
+    device: &wgpu::Device,
+    label: &str,
+    size: u64,
+    extra: wgpu::BufferUsages,
+) -> wgpu::Buffer {
+    device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size: size.max(16),
+        usage: wgpu::BufferUsages::STORAGE | extra,
+        mapped_at_creation: false,
+    })
+}
+
+/// Orphan records (and slots) only where they are written (`splat_orphans`).
+fn orphan_capacity(config: &BeamConfig) -> u64 {
+    if config.beams.splat_orphans {
+        u64::from(config.beams.max_beams)
+    } else {
+        0
+    }
+}
+
+/// What every light's beam generation uses in turn, sized by `max_beams` (the lights'
+/// generations run one after another, so one set serves all), and the raw surface
+/// caustic all lights' beams are drawn into.
 struct Buffers {
     raw_surface: Target,
-    uniforms: wgpu::Buffer,
     candidates_a: wgpu::Buffer,
     candidates_b: wgpu::Buffer,
     actions: wgpu::Buffer,
     offsets: wgpu::Buffer,
-    beams: wgpu::Buffer,
-    /// `splat_orphans`' per-candidate family mask and record offset, and the records
-    /// (16-byte placeholders without it).
+    /// `splat_orphans`' per-candidate family mask and record offset (a 16-byte
+    /// placeholder without it).
     orphan_slots: wgpu::Buffer,
+    control_init: wgpu::Buffer,
+    filter_uniforms: wgpu::Buffer,
+    /// The `max_beams` buffers' bytes (these and every light's) in the device's memory
+    /// ledger.
+    _memory: Reservation,
+}
+
+/// What one light's beams are written to and drawn from: kept until the next frame's
+/// generation, so a scoring sub-frame that reuses the light side draws them again.
+struct LightBuffers {
+    uniforms: wgpu::Buffer,
+    beams: wgpu::Buffer,
+    /// `splat_orphans`' records (a 16-byte placeholder without it).
     orphans: wgpu::Buffer,
     control: wgpu::Buffer,
-    control_init: wgpu::Buffer,
     indirect_args: wgpu::Buffer,
-    filter_uniforms: wgpu::Buffer,
-    /// The `max_beams` buffers' bytes in the device's memory ledger.
-    _memory: Reservation,
+}
+
+impl LightBuffers {
+    fn new(device: &wgpu::Device, config: &BeamConfig, uniforms: &BeamUniforms) -> Self {
+        let cap = u64::from(config.beams.max_beams);
+        let copy = wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC;
+        Self {
+            uniforms: uniform_buffer(device, "beam uniforms", bytemuck::bytes_of(uniforms)),
+            beams: storage_buffer(
+                device,
+                "beams",
+                cap * BEAM_BYTES,
+                wgpu::BufferUsages::COPY_SRC,
+            ),
+            // At least one record: the shader declares an array of them.
+            orphans: storage_buffer(
+                device,
+                "beam orphans",
+                orphan_capacity(config).max(1) * ORPHAN_BYTES,
+                wgpu::BufferUsages::empty(),
+            ),
+            control: storage_buffer(device, "beam control", (CONTROL_WORDS * 4) as u64, copy),
+            indirect_args: storage_buffer(
+                device,
+                "beam indirect args",
+                INDIRECT_ARGS_BYTES,
+                wgpu::BufferUsages::INDIRECT,
+            ),
+        }
+    }
+
+    fn bytes(&self) -> u64 {
+        [
+            &self.uniforms,
+            &self.beams,
+            &self.orphans,
+            &self.control,
+            &self.indirect_args,
+        ]
+        .iter()
+        .map(|b| b.size())
+        .sum()
+    }
 }
 
 impl Buffers {
@@ -436,30 +574,13 @@ impl Buffers {
         ctx: &GpuContext,
         camera: &caustics_scene::Camera,
         config: &BeamConfig,
-        uniforms: &BeamUniforms,
         memory: Reservation,
     ) -> Result<Self, GpuError> {
         let device = &ctx.device;
-        let init = |label: &str, contents: &[u8], usage| {
-            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents,
-                usage,
-            })
+        let storage = |label: &str, size: u64| {
+            storage_buffer(device, label, size, wgpu::BufferUsages::empty())
         };
-        let storage = |label: &str, size: u64, extra: wgpu::BufferUsages| {
-            device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size: size.max(16),
-                usage: wgpu::BufferUsages::STORAGE | extra,
-                mapped_at_creation: false,
-            })
-        };
-        let cap = config.beams.max_beams as u64;
-        // Orphan slots only where they are written.
-        let orphan_cap = if config.beams.splat_orphans { cap } else { 0 };
-        let none = wgpu::BufferUsages::empty();
-        let copy = wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC;
+        let cap = u64::from(config.beams.max_beams);
         let filter = FilterUniforms::new(config.beams.surface_filter_px);
         Ok(Self {
             raw_surface: Target::new(
@@ -471,34 +592,20 @@ impl Buffers {
                 1,
                 wgpu::TextureUsages::empty(),
             )?,
-            uniforms: init(
-                "beam uniforms",
-                bytemuck::bytes_of(uniforms),
-                wgpu::BufferUsages::UNIFORM,
-            ),
-            candidates_a: storage("beam candidates a", cap * CANDIDATE_BYTES, none),
-            candidates_b: storage("beam candidates b", cap * CANDIDATE_BYTES, none),
-            actions: storage("beam actions", cap * 4, none),
-            offsets: storage("beam offsets", cap * 8, none),
-            beams: storage("beams", cap * BEAM_BYTES, wgpu::BufferUsages::COPY_SRC),
-            orphan_slots: storage("beam orphan slots", orphan_cap * 8, none),
-            // At least one record: the shader declares an array of them.
-            orphans: storage("beam orphans", orphan_cap.max(1) * ORPHAN_BYTES, none),
-            control: storage("beam control", (CONTROL_WORDS * 4) as u64, copy),
-            control_init: init(
-                "beam control reset",
-                bytemuck::cast_slice(&[0u32; CONTROL_WORDS]),
-                wgpu::BufferUsages::COPY_SRC,
-            ),
-            indirect_args: storage(
-                "beam indirect args",
-                INDIRECT_ARGS_BYTES,
-                wgpu::BufferUsages::INDIRECT,
-            ),
-            filter_uniforms: init(
+            candidates_a: storage("beam candidates a", cap * CANDIDATE_BYTES),
+            candidates_b: storage("beam candidates b", cap * CANDIDATE_BYTES),
+            actions: storage("beam actions", cap * 4),
+            offsets: storage("beam offsets", cap * 8),
+            orphan_slots: storage("beam orphan slots", orphan_capacity(config) * 8),
+            control_init: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("beam control reset"),
+                contents: bytemuck::cast_slice(&[0u32; CONTROL_WORDS]),
+                usage: wgpu::BufferUsages::COPY_SRC,
+            }),
+            filter_uniforms: uniform_buffer(
+                device,
                 "beam filter uniforms",
                 bytemuck::bytes_of(&filter),
-                wgpu::BufferUsages::UNIFORM,
             ),
             _memory: memory,
         })
@@ -507,17 +614,12 @@ impl Buffers {
     fn bytes(&self) -> u64 {
         self.raw_surface.bytes
             + [
-                &self.uniforms,
                 &self.candidates_a,
                 &self.candidates_b,
                 &self.actions,
                 &self.offsets,
-                &self.beams,
                 &self.orphan_slots,
-                &self.orphans,
-                &self.control,
                 &self.control_init,
-                &self.indirect_args,
                 &self.filter_uniforms,
             ]
             .iter()
@@ -551,64 +653,53 @@ impl BeamMethod {
             .iter()
             .flat_map(|s| gpu_scene.meshes[s.object].positions.iter().copied())
             .collect();
-        let view = LightView::fit_points(&scene.lights[0], &points, config.beams.light_resolution)
-            .ok_or_else(|| {
-                unsupported(Unsupported(
-                    "no light view holds the specular objects".into(),
-                ))
+        let views = scene
+            .lights
+            .iter()
+            .enumerate()
+            .map(|(l, light)| {
+                LightView::fit_points(light, &points, config.beams.light_resolution).ok_or_else(
+                    || {
+                        unsupported(Unsupported(format!(
+                            "no view of lights[{l}] holds the specular objects"
+                        )))
+                    },
+                )
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        let memory =
+            reserve_beam_buffers(ctx, config, views.len()).map_err(|e| MethodError::Param {
+                method: name,
+                message: e.to_string(),
             })?;
-        let memory = reserve_beam_buffers(ctx, config).map_err(|e| MethodError::Param {
-            method: name,
-            message: e.to_string(),
-        })?;
         ctx.checked("beam pipeline setup", || {
-            Self::build(ctx, renderer, config, name, &slots, &view, memory)
+            Self::build(ctx, renderer, config, name, &slots, &views, memory)
         })?
     }
 
-    /// The passes of Sect. 4–7: the light G-buffer and the impostors of the
-    /// generators, beam generation, hull rasterization, the surface filter.
+    /// The passes of Sect. 4–7: the light G-buffer (one per light) and the impostors
+    /// of the generators, beam generation, hull rasterization, the surface filter.
     fn build(
         ctx: &GpuContext,
         renderer: &Renderer,
         config: &BeamConfig,
         name: &'static str,
         slots: &[Slot],
-        view: &LightView,
+        views: &[LightView],
         memory: Reservation,
     ) -> Result<Self, MethodError> {
         let device = &ctx.device;
         let scene = &renderer.scene().scene;
-        let light_gbuffer = renderer.gbuffer_pass().light_gbuffer(ctx, view)?;
         let impostor_pass = ImpostorPass::new(ctx)?;
         let atlas = impostor_atlas(ctx, renderer, &impostor_pass, slots, config)?;
-        let uniforms = BeamUniforms::new(scene, config, view, slots, &atlas);
-        let b = Buffers::new(ctx, &scene.camera, config, &uniforms, memory)?;
+        let b = Buffers::new(ctx, &scene.camera, config, memory)?;
 
         // Built (once per scene) also for the impostor tracer: the pass binds it either way.
         let bvh = renderer.scene().triangle_bvh(ctx)?;
         let shader = Shader::new(ctx, "beams generate.wgsl", generate_source())?;
         let generate = ComputePass::builder(ctx, &format!("{name}/generate"), &shader)
             .frame(renderer)
-            .bind(
-                1,
-                &[
-                    ("u", &b.uniforms),
-                    ("light_position", &light_gbuffer.position.view),
-                    ("light_normal", &light_gbuffer.normal.view),
-                    ("light_ids", &light_gbuffer.ids.view),
-                    ("impostor_map", &atlas.normal_distance.view),
-                    ("impostor_ids", &atlas.object_ids.view),
-                    ("candidates_a", &b.candidates_a),
-                    ("candidates_b", &b.candidates_b),
-                    ("actions", &b.actions),
-                    ("offsets", &b.offsets),
-                    ("control", &b.control),
-                    ("beams", &b.beams),
-                    ("orphan_slots", &b.orphan_slots),
-                    ("orphans", &b.orphans),
-                ],
-            )
+            .caller_group(1)
             .bind(
                 BVH_GROUP,
                 &[("bvh_nodes", &bvh.nodes), ("bvh_triangles", &bvh.triangles)],
@@ -630,16 +721,15 @@ impl BeamMethod {
             .kernel_groups("scan", &[0, 1])
             .kernel_groups("emit", &[0, 1, BVH_GROUP])
             .build()?;
-        let args = indirect_args_group(device, &generate, &b.indirect_args)?;
 
-        let (rasterize, raster_bytes) = HullRaster::build(ctx, renderer, config, name, &b)?;
+        let (rasterize, raster_bytes) = HullRaster::build(ctx, renderer, config, name)?;
 
         let orphan_points = if config.beams.splat_orphans {
             let shader = Shader::new(ctx, "beams orphans.wgsl", orphans_source())?;
             Some(
                 RasterPass::builder(ctx, &format!("{name}/orphan_points"), &shader, "vs_orphan")
                     .frame(renderer)
-                    .bind(1, &[("u", &b.uniforms), ("orphans", &b.orphans)])
+                    .caller_group(1)
                     .points()
                     .fragment("fs_orphan", &[Some(additive_hdr_target())])
                     .counted()
@@ -667,15 +757,57 @@ impl BeamMethod {
         )
         .build()?;
 
-        let bytes = light_gbuffer.bytes() + atlas.bytes() + b.bytes() + raster_bytes;
+        let mut lights = Vec::with_capacity(views.len());
+        let mut bytes = atlas.bytes() + b.bytes() + raster_bytes;
+        for (index, view) in views.iter().enumerate() {
+            let light_gbuffer = renderer.gbuffer_pass().light_gbuffer(ctx, view)?;
+            let uniforms = BeamUniforms::new(scene, config, index, view, slots, &atlas);
+            let lb = LightBuffers::new(device, config, &uniforms);
+            let generate_group = group_one(generate.name(), generate.schema(1))?.bind(
+                device,
+                &[
+                    ("u", &lb.uniforms),
+                    ("light_position", &light_gbuffer.position.view),
+                    ("light_normal", &light_gbuffer.normal.view),
+                    ("light_ids", &light_gbuffer.ids.view),
+                    ("impostor_map", &atlas.normal_distance.view),
+                    ("impostor_ids", &atlas.object_ids.view),
+                    ("candidates_a", &b.candidates_a),
+                    ("candidates_b", &b.candidates_b),
+                    ("actions", &b.actions),
+                    ("offsets", &b.offsets),
+                    ("control", &lb.control),
+                    ("beams", &lb.beams),
+                    ("orphan_slots", &b.orphan_slots),
+                    ("orphans", &lb.orphans),
+                ],
+            )?;
+            let args = indirect_args_group(device, &generate, &lb.indirect_args)?;
+            let raster_group = rasterize.light_group(device, &lb)?;
+            let orphan_group = match &orphan_points {
+                Some(pass) => Some(
+                    group_one(pass.name(), pass.schema(1))?
+                        .bind(device, &[("u", &lb.uniforms), ("orphans", &lb.orphans)])?,
+                ),
+                None => None,
+            };
+            bytes += light_gbuffer.bytes() + lb.bytes();
+            lights.push(LightBeams {
+                light_gbuffer,
+                buffers: lb,
+                generate_group,
+                args,
+                raster_group,
+                orphan_group,
+            });
+        }
         Ok(Self {
             config: config.clone(),
-            light_gbuffer,
             impostor_pass,
             atlas,
             buffers: b,
+            lights,
             generate,
-            args,
             rasterize,
             orphan_points,
             surface_filter,
@@ -687,30 +819,25 @@ impl BeamMethod {
         })
     }
 
-    /// The beams of the last frame, read back (tests and diagnostics; not per frame).
+    /// The beams of the last frame, read back, the scene's lights in order (tests and
+    /// diagnostics; not per frame).
     pub fn read_beams(&self, ctx: &GpuContext) -> Result<Vec<BeamRecord>, MethodError> {
-        let control = self.read_control(ctx)?;
-        let count = control[control::BEAM_TOTAL.index] as u64;
-        if count == 0 {
-            return Ok(Vec::new());
+        let mut out = Vec::new();
+        for light in &self.lights {
+            let control = read_control(ctx, &light.buffers)?;
+            let count = control[control::BEAM_TOTAL.index] as u64;
+            if count == 0 {
+                continue;
+            }
+            let bytes = caustics_gpu::readback::read_buffer_bytes(
+                ctx,
+                &light.buffers.beams,
+                count * BEAM_BYTES,
+                "beams",
+            )?;
+            out.extend(bytemuck::pod_collect_to_vec::<u8, BeamRecord>(&bytes));
         }
-        let bytes = caustics_gpu::readback::read_buffer_bytes(
-            ctx,
-            &self.buffers.beams,
-            count * BEAM_BYTES,
-            "beams",
-        )?;
-        Ok(bytemuck::pod_collect_to_vec(&bytes))
-    }
-
-    fn read_control(&self, ctx: &GpuContext) -> Result<Vec<u32>, MethodError> {
-        let control = &self.buffers.control;
-        Ok(caustics_gpu::readback::read_buffer_u32(
-            ctx,
-            control,
-            control.size(),
-            "beam control",
-        )?)
+        Ok(out)
     }
 
     /// The configuration it was built with.
@@ -719,10 +846,25 @@ impl BeamMethod {
     }
 }
 
-/// The beam and candidate buffers `max_beams` sizes, against the device's largest
-/// storage binding and the memory budget (summed with what is held), reserved before
-/// any is made.
-fn reserve_beam_buffers(ctx: &GpuContext, config: &BeamConfig) -> Result<Reservation, GpuError> {
+/// One light's control words, read back.
+fn read_control(ctx: &GpuContext, light: &LightBuffers) -> Result<Vec<u32>, MethodError> {
+    let control = &light.control;
+    Ok(caustics_gpu::readback::read_buffer_u32(
+        ctx,
+        control,
+        control.size(),
+        "beam control",
+    )?)
+}
+
+/// The beam and candidate buffers `max_beams` sizes (the candidates once, the beams
+/// once per light of `lights`), against the device's largest storage binding and the
+/// memory budget (summed with what is held), reserved before any is made.
+fn reserve_beam_buffers(
+    ctx: &GpuContext,
+    config: &BeamConfig,
+    lights: usize,
+) -> Result<Reservation, GpuError> {
     let limits = &ctx.limits;
     // The light G-buffer and the impostors are textures (their bytes are reserved as
     // they are made); their sides are checked here, naming the parameter.
@@ -745,16 +887,18 @@ fn reserve_beam_buffers(ctx: &GpuContext, config: &BeamConfig) -> Result<Reserva
         cap * BEAM_BYTES,
         &raise,
     )?;
-    // Both candidate lists, the actions, the offsets and the beams; with splat_orphans
-    // the orphan slots and records too.
-    let orphan_bytes = if config.beams.splat_orphans {
-        8 + ORPHAN_BYTES
+    // Both candidate lists, the actions and the offsets (with splat_orphans the orphan
+    // slots) once; each light's beams (with splat_orphans its orphan records).
+    let (slot_bytes, orphan_bytes) = if config.beams.splat_orphans {
+        (8, ORPHAN_BYTES)
     } else {
-        0
+        (0, 0)
     };
+    let per_beam =
+        2 * CANDIDATE_BYTES + 4 + 8 + slot_bytes + lights as u64 * (BEAM_BYTES + orphan_bytes);
     ctx.memory.reserve(
-        &format!("max_beams: the beam generation buffers ({cap} beams)"),
-        cap * (2 * CANDIDATE_BYTES + 4 + 8 + BEAM_BYTES + orphan_bytes),
+        &format!("max_beams: the beam generation buffers ({cap} beams, {lights} lights)"),
+        cap * per_beam,
         &raise,
     )
 }
@@ -797,23 +941,28 @@ fn indirect_args_group(
 }
 
 impl BeamMethod {
-    /// Generates the beams: light G-buffer and impostors (impostor tracer), then the
-    /// base grid, refined level by level, and the draw arguments.
+    /// Generates the beams: light G-buffers and impostors (impostor tracer), then per
+    /// light the base grid, refined level by level, and the draw arguments.
     fn record_light_side(&self, frame: &mut Frame<'_>) -> Result<(), MethodError> {
         let renderer = frame.renderer;
         let scene = renderer.scene();
         let b = &self.buffers;
-        frame
-            .encoder
-            .copy_buffer_to_buffer(&b.control_init, 0, &b.control, 0, b.control.size());
+        for light in &self.lights {
+            let control = &light.buffers.control;
+            frame
+                .encoder
+                .copy_buffer_to_buffer(&b.control_init, 0, control, 0, control.size());
+        }
         // Exact tracing reads neither the light G-buffer nor the impostors.
         if self.config.beams.tracer == Tracer::Impostor {
-            renderer.gbuffer_pass().record(
-                frame,
-                &self.pass_names.light_gbuffer,
-                scene,
-                &self.light_gbuffer,
-            )?;
+            for light in &self.lights {
+                renderer.gbuffer_pass().record(
+                    frame,
+                    &self.pass_names.light_gbuffer,
+                    scene,
+                    &light.light_gbuffer,
+                )?;
+            }
             self.impostor_pass.record_atlas(
                 frame,
                 &self.pass_names.impostors,
@@ -821,20 +970,23 @@ impl BeamMethod {
                 &self.atlas,
             )?;
         }
-        {
-            let mut pass = self.generate.begin(frame)?;
-            pass.set_bind_group(2, &self.args, &[]);
-            let base = 2 * self.config.beams.grid * self.config.beams.grid;
+        let mut pass = self.generate.begin(frame)?;
+        let base = 2 * self.config.beams.grid * self.config.beams.grid;
+        let ranked = self.config.refinement.beam_budget > 0;
+        // One light after another: they share the candidate lists.
+        for light in &self.lights {
+            let args = &light.buffers.indirect_args;
+            pass.set_bind_group(1, &light.generate_group, &[]);
+            pass.set_bind_group(2, &light.args, &[]);
             pass.dispatch("init_grid", [base.div_ceil(64), 1, 1])?;
-            let ranked = self.config.refinement.beam_budget > 0;
             for level in 0..=self.config.refinement.levels {
-                pass.dispatch_indirect("decide", &b.indirect_args, 0)?;
+                pass.dispatch_indirect("decide", args, 0)?;
                 // The last level splits nothing: no threshold to find.
                 if ranked && level < self.config.refinement.levels {
                     pass.dispatch("budget", [1, 1, 1])?;
                 }
                 pass.dispatch("scan", [1, 1, 1])?;
-                pass.dispatch_indirect("emit", &b.indirect_args, 0)?;
+                pass.dispatch_indirect("emit", args, 0)?;
                 pass.dispatch("advance", [1, 1, 1])?;
             }
             pass.dispatch("finalize", [1, 1, 1])?;
@@ -869,7 +1021,10 @@ impl CausticsMethod for BeamMethod {
         match &self.rasterize {
             HullRaster::Hardware(rasterize) => {
                 let mut pass = rasterize.begin(frame, &attachments, None)?;
-                pass.draw_indirect(&b.indirect_args, DRAW_ARGS_OFFSET);
+                for light in &self.lights {
+                    pass.set_bind_group(1, &light.raster_group, &[]);
+                    pass.draw_indirect(&light.buffers.indirect_args, DRAW_ARGS_OFFSET);
+                }
             }
             HullRaster::Compute {
                 rasterize,
@@ -880,11 +1035,14 @@ impl CausticsMethod for BeamMethod {
                 frame.encoder.clear_buffer(counts, 0, None);
                 {
                     let mut pass = rasterize.begin(frame)?;
-                    pass.dispatch_indirect(
-                        "rasterize",
-                        &b.indirect_args,
-                        RASTER_DISPATCH_ARGS_OFFSET,
-                    )?;
+                    for light in &self.lights {
+                        pass.set_bind_group(1, &light.raster_group, &[]);
+                        pass.dispatch_indirect(
+                            "rasterize",
+                            &light.buffers.indirect_args,
+                            RASTER_DISPATCH_ARGS_OFFSET,
+                        )?;
+                    }
                 }
                 let mut pass = resolve.begin(frame, &attachments, None)?;
                 pass.draw_fullscreen();
@@ -894,7 +1052,12 @@ impl CausticsMethod for BeamMethod {
             // Into the raw surface caustic, before the filter, beside the beams' light.
             let attachments = [load_attachment(&b.raw_surface.view)];
             let mut pass = orphan_points.begin(frame, &attachments, None)?;
-            pass.draw_indirect(&b.indirect_args, ORPHAN_DRAW_ARGS_OFFSET);
+            for light in &self.lights {
+                if let Some(group) = &light.orphan_group {
+                    pass.set_bind_group(1, group, &[]);
+                    pass.draw_indirect(&light.buffers.indirect_args, ORPHAN_DRAW_ARGS_OFFSET);
+                }
+            }
         }
         let attachments = [load_attachment(&renderer.targets().surface.view)];
         let mut pass = self.surface_filter.begin(frame, &attachments, None)?;
@@ -903,9 +1066,24 @@ impl CausticsMethod for BeamMethod {
     }
 
     fn counters(&self, ctx: &GpuContext) -> Result<Counters, MethodError> {
-        let c = self.read_control(ctx)?;
-        let mut out =
-            control::counters(&c, self.config.refinement.levels, self.config.beams.bounces);
+        // Summed over the lights (each light's generation is the paper's whole one),
+        // but for the levels run, which every light runs alike.
+        let mut out = Counters::new();
+        let mut beams = 0u64;
+        for light in &self.lights {
+            let c = read_control(ctx, &light.buffers)?;
+            beams += u64::from(c[control::BEAM_TOTAL.index]);
+            let counters =
+                control::counters(&c, self.config.refinement.levels, self.config.beams.bounces);
+            for (name, value) in counters {
+                let sum = out.entry(name.clone()).or_insert(0);
+                *sum = if Some(name.as_str()) == control::LEVEL.counter {
+                    (*sum).max(value)
+                } else {
+                    *sum + value
+                };
+            }
+        }
         // The orphans' counters only where they are drawn: the default's counters are
         // the paper's (and the regression baselines').
         if !self.config.beams.splat_orphans {
@@ -913,13 +1091,13 @@ impl CausticsMethod for BeamMethod {
                 out.remove(name);
             }
         }
-        // Derived: 8 hull triangles per beam, 2 base triangles per grid cell.
-        out.insert(
-            "hull_triangles".into(),
-            8 * u64::from(c[control::BEAM_TOTAL.index]),
-        );
+        // Derived: 8 hull triangles per beam, 2 base triangles per grid cell and light.
+        out.insert("hull_triangles".into(), 8 * beams);
         let grid = u64::from(self.config.beams.grid);
-        out.insert("base_triangles".into(), 2 * grid * grid);
+        out.insert(
+            "base_triangles".into(),
+            2 * grid * grid * self.lights.len() as u64,
+        );
         // The compute rasterizer's pairs only where it runs (the hardware path's work
         // is its rasterize pass's fragments).
         if let HullRaster::Compute { counts, .. } = &self.rasterize {

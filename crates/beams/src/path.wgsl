@@ -285,7 +285,7 @@ fn trace_path(uv: vec2<f32>, family: u32) -> PathEnd {
     if u.light_dir_kind.w < 0.5 {
         w = u.light_power.xyz * extinction(dot(g.position, ray.dir) - u.light_pos_start.w);
     } else {
-        let light = lights[0];
+        let light = lights[u.light_index];
         w = light_intensity(light, ray.dir) * extinction(distance(g.position, u.light_pos_start.xyz));
     }
     var p = g.position;

@@ -74,6 +74,8 @@ struct BeamUniforms {
     // 1: the landed corners of the families a leaf drops are written as orphan records
     // and drawn as points (`splat_orphans`).
     splat_orphans: u32,
+    // The scene light (index into group 0's `lights`) these beams carry.
+    light_index: u32,
 }
 
 // A triangle of the projected grid in the light's uv space: uv01 corners 0 and 1,

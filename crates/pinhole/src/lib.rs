@@ -53,7 +53,8 @@
 //! direction is traced per pair (the paper tests no light visibility, §5); the sky
 //! lights every side of a mirror, so the lit side is the receiver's ([`light_map`]).
 //!
-//! Supports one light of any kind and one caustic generator: a mirror of any shape
+//! Supports lights of any kind, any number of them (one map each, both passes once per
+//! light into the same caustic: [`Pinhole`]), and one caustic generator: a mirror of any shape
 //! (sphere, open cylinder as Wand's ring, quad, triangle mesh, heightfield), a
 //! dielectric sphere (in and out: two refractions, the special case whose exit point is
 //! analytic), or an open dielectric surface (a heightfield, a quad, an open cylinder):
@@ -253,11 +254,8 @@ impl GeneratorMode {
 /// cannot render the scene. Any object may be a receiver or an occluder (visibility is
 /// traced through the scene's analytic shapes and its triangle BVH).
 pub fn caustic_generator(scene: &Scene) -> Result<(usize, GeneratorMode), Unsupported> {
-    if scene.lights.len() != 1 {
-        return Err(Unsupported(format!(
-            "needs exactly one light (one cube map), the scene has {}",
-            scene.lights.len()
-        )));
+    if scene.lights.is_empty() {
+        return Err(Unsupported("the scene has no light".into()));
     }
     let mut generator = None;
     for (i, o) in scene.objects.iter().enumerate() {
@@ -288,30 +286,31 @@ pub fn caustic_generator(scene: &Scene) -> Result<(usize, GeneratorMode), Unsupp
 
 fn check_scene(scene: &Scene) -> Result<(), Unsupported> {
     let (g, _) = caustic_generator(scene)?;
-    if let Light::Sphere {
-        position, radius, ..
-    } = scene.lights[0]
-    {
-        let bounds = scene.objects[g].shape.bounds();
-        let d = position.distance(bounds.center());
-        if d <= radius + bounds.bounding_sphere_radius() {
-            return Err(Unsupported(
-                "the sphere light reaches into the generator's bounds: its disc in the map would hold the generator".into(),
-            ));
+    let bounds = scene.objects[g].shape.bounds();
+    for (l, light) in scene.lights.iter().enumerate() {
+        if let Light::Sphere {
+            position, radius, ..
+        } = *light
+        {
+            let d = position.distance(bounds.center());
+            if d <= radius + bounds.bounding_sphere_radius() {
+                return Err(Unsupported(format!(
+                    "the sphere light lights[{l}] reaches into the generator's bounds: its disc in the map would hold the generator"
+                )));
+            }
+            if (radius / d).atan() > MAX_LIGHT_ANGLE {
+                return Err(Unsupported(format!(
+                    "the sphere light lights[{l}] spans {:.3} rad around the map's axis seen from the generator: the map's one face holds up to {MAX_LIGHT_ANGLE} rad (the light_angle bound)",
+                    (radius / d).atan()
+                )));
+            }
         }
-        if (radius / d).atan() > MAX_LIGHT_ANGLE {
+        if let Light::Point { position, .. } | Light::Spot { position, .. } = *light
+            && position.distance(bounds.center()) < 1e-3
+        {
             return Err(Unsupported(format!(
-                "the sphere light spans {:.3} rad around the map's axis seen from the generator: the map's one face holds up to {MAX_LIGHT_ANGLE} rad (the light_angle bound)",
-                (radius / d).atan()
+                "lights[{l}] sits at the generator's centre, where the cube map is centred"
             )));
-        }
-    }
-    if let Light::Point { position, .. } | Light::Spot { position, .. } = scene.lights[0] {
-        let centre = scene.objects[g].shape.bounds().center();
-        if position.distance(centre) < 1e-3 {
-            return Err(Unsupported(
-                "the light sits at the generator's centre, where the cube map is centred".into(),
-            ));
         }
     }
     Ok(())
@@ -429,26 +428,42 @@ impl LightDisc {
 #[rustfmt::skip]
 const COUNTER_DOCS: &[CounterDoc] = &[
     CounterDoc { name: "samples", doc: "point samples on the caustic generator, each a pinhole camera projecting the light map (the samples parameter)" },
-    CounterDoc { name: "passes", doc: "additive gather passes per frame (instances of a fullscreen triangle), each looping over samples_per_pass samples: samples / samples_per_pass, rounded up" },
+    CounterDoc { name: "passes", doc: "additive gather passes per frame (instances of a fullscreen triangle), each looping over samples_per_pass samples: samples / samples_per_pass, rounded up, per light" },
     CounterDoc { name: "camera_pixels", doc: "pixels of the camera image (width x height), each covered by every gather pass: set by the scene, not counted on the GPU" },
     CounterDoc { name: "receiver_fragments", doc: "gather fragments on a diffuse receiver pixel in the count frame, over all passes (pixels that see a diffuse surface x passes; the others are discarded)" },
-    CounterDoc { name: "sample_pixel_pairs", doc: "(receiver pixel, sample) pairs the gather loop evaluated in the count frame: diffuse receiver pixels x samples (with reflections each pair also evaluates the reflected path, counted once)" },
+    CounterDoc { name: "sample_pixel_pairs", doc: "(receiver pixel, sample) pairs the gather loop evaluated in the count frame: diffuse receiver pixels x samples x lights (with reflections each pair also evaluates the reflected path, counted once)" },
     CounterDoc { name: "texture_fetches", doc: "light-map probes taken in the count frame: 1 per lookup whose filter footprint is within a texel (always, with filtering off), up to 16 along an anisotropic filter footprint, none for a pair culled as facing away, without a path or outside the light map's face (both paths with reflections); the visibility test comes after the lookup, so an occluded pair's probes count" },
     CounterDoc { name: "visibility_tests", doc: "receiver-to-sample segments traced against the scene in the count frame: only the pairs whose lookup lands on the light (the others add nothing whether occluded or not); visibility_tests / sample_pixel_pairs is the share the gather pays a ray for" },
 ];
 
 /// `pinhole` bound to one scene.
+///
+/// The paper's light is one environment map of the incoming light; with several
+/// lights each gets its own map (the light's cube map in a frame aimed at it, or an
+/// environment's lat-long map) and the two passes run once per light into the same
+/// caustic: the maps' sum is the paper's one map, kept apart so each light's disc
+/// keeps the map's whole resolution.
 pub struct Pinhole {
     prepare: ComputePass,
     gather: RasterPass,
+    /// One per scene light, in the scene's order.
+    lights: Vec<PinholeLight>,
     counters: wgpu::Buffer,
     sample_count: u32,
     batches: u32,
     receiver_pixels_hint: u64,
     bytes: u64,
-    /// The light map and the sample buffers, held in the device's memory ledger while
-    /// the passes' bind groups use them.
-    _memory: (LightMap, Reservation),
+    /// The sample buffers, held in the device's memory ledger while the passes' bind
+    /// groups use them.
+    _memory: Reservation,
+}
+
+/// One light's map, what each sample sees of it, and its groups of both passes.
+struct PinholeLight {
+    prepare_group: wgpu::BindGroup,
+    gather_group: wgpu::BindGroup,
+    /// The light map (in the device's memory ledger while the groups use it).
+    _map: LightMap,
 }
 
 /// The GPU form of the samples, with ε and the finite-difference step filled in.
@@ -468,18 +483,20 @@ fn gpu_samples(samples: &[PointSample], epsilon_scale: f32) -> Vec<GpuSample> {
         .collect()
 }
 
-/// The uniform of both passes: the generator, the batching and the light map's frame.
+/// The uniform of both passes for the scene light `light_index`: the generator, the
+/// batching and the light map's frame.
 fn gpu_params(
     params: &PinholeParams,
     generator: u32,
     mode: u32,
     sample_count: u32,
+    light_index: usize,
     disc: &LightDisc,
 ) -> GpuParams {
     let (map_u, map_v) = caustics_scene::perpendicular_frame(disc.axis);
     GpuParams {
         generator,
-        light_index: 0,
+        light_index: light_index as u32,
         sample_count,
         batch_size: params.samples_per_pass,
         mode,
@@ -495,69 +512,64 @@ fn gpu_params(
     }
 }
 
-/// The buffers the passes share.
+/// The buffers the passes share: the samples and the counters (every light's gather
+/// adds to them).
 struct Buffers {
-    params: wgpu::Buffer,
     samples: wgpu::Buffer,
-    sample_light: wgpu::Buffer,
     counters: wgpu::Buffer,
 }
 
+/// One light's buffers: its uniform and the light each sample sees of it.
+struct LightBuffers {
+    params: wgpu::Buffer,
+    sample_light: wgpu::Buffer,
+}
+
 impl Buffers {
-    fn new(device: &wgpu::Device, params: &GpuParams, samples: &[GpuSample]) -> Self {
-        let init = |label: &str, contents: &[u8], usage| {
-            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents,
-                usage,
-            })
-        };
-        let empty = |label: &str, size: u64, usage| {
-            device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size,
-                usage,
-                mapped_at_creation: false,
-            })
-        };
+    fn new(device: &wgpu::Device, samples: &[GpuSample]) -> Self {
         Self {
-            params: init(
-                "pinhole params",
-                bytemuck::bytes_of(params),
-                wgpu::BufferUsages::UNIFORM,
-            ),
-            samples: init(
-                "pinhole samples",
-                bytemuck::cast_slice(samples),
-                wgpu::BufferUsages::STORAGE,
-            ),
-            sample_light: empty(
-                "pinhole sample light",
-                samples.len() as u64 * 16,
-                wgpu::BufferUsages::STORAGE,
-            ),
+            samples: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("pinhole samples"),
+                contents: bytemuck::cast_slice(samples),
+                usage: wgpu::BufferUsages::STORAGE,
+            }),
             // receiver fragments, pairs (lo, hi), texture fetches (lo, hi), visibility
             // tests (lo, hi): gather.wgsl.
-            counters: empty(
-                "pinhole counters",
-                32,
-                wgpu::BufferUsages::STORAGE
+            counters: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("pinhole counters"),
+                size: 32,
+                usage: wgpu::BufferUsages::STORAGE
                     | wgpu::BufferUsages::COPY_DST
                     | wgpu::BufferUsages::COPY_SRC,
-            ),
+                mapped_at_creation: false,
+            }),
         }
     }
 
     fn bytes(&self) -> u64 {
-        [
-            &self.params,
-            &self.samples,
-            &self.sample_light,
-            &self.counters,
-        ]
-        .iter()
-        .map(|b| b.size())
-        .sum()
+        self.samples.size() + self.counters.size()
+    }
+}
+
+impl LightBuffers {
+    fn new(device: &wgpu::Device, params: &GpuParams, sample_count: u32) -> Self {
+        Self {
+            params: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("pinhole params"),
+                contents: bytemuck::bytes_of(params),
+                usage: wgpu::BufferUsages::UNIFORM,
+            }),
+            sample_light: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("pinhole sample light"),
+                size: u64::from(sample_count) * 16,
+                usage: wgpu::BufferUsages::STORAGE,
+                mapped_at_creation: false,
+            }),
+        }
+    }
+
+    fn bytes(&self) -> u64 {
+        self.params.size() + self.sample_light.size()
     }
 }
 
@@ -596,44 +608,31 @@ impl Pinhole {
             params.seed as u64,
         )
         .map_err(|e| unsupported(Unsupported(e.to_string())))?;
-        let disc = LightDisc::new(
-            &scene.lights[0],
-            surface.bounds().center(),
-            params.light_angle as f32,
-        );
+        let centre = surface.bounds().center();
         let sample_count = samples.len() as u32;
-        let mut gpu_params = gpu_params(params, generator as u32, mode.code(), sample_count, &disc);
         let bvh = gpu_scene.triangle_bvh(ctx)?;
-        // The samples (80 bytes each) and the light each sees (16 bytes), bound whole.
+        // The samples (80 bytes each) and the light each sees of each light (16 bytes),
+        // bound whole.
+        let sample_bytes = 80 + 16 * scene.lights.len() as u64;
         let samples_memory = ctx
             .reserve_storage(
-                &format!("samples: the sample buffers ({sample_count} x 96 bytes)"),
-                u64::from(sample_count) * 96,
+                &format!(
+                    "samples: the sample buffers ({sample_count} x {sample_bytes} bytes, {} lights)",
+                    scene.lights.len()
+                ),
+                u64::from(sample_count) * sample_bytes,
                 "lower samples",
             )
             .map_err(|e| MethodError::Param {
                 method: NAME,
                 message: e.to_string(),
             })?;
-        let (buffers, map) = ctx.checked("pinhole setup", || {
-            // The light's map: an environment's own lat-long map, else the +Z face of
-            // the light's cube map, each with its mip chain.
-            let map = match &scene.lights[0] {
-                Light::Environment { map, scale } => {
-                    let (texture, peak) = LightMap::environment(ctx, map)?;
-                    gpu_params.environment = 1;
-                    gpu_params.env_scale = (*scale * peak).extend(0.0).to_array();
-                    texture
-                }
-                _ => LightMap::new(ctx, params.cube_size, disc.alpha)?,
-            };
-            let buffers = Buffers::new(
+        let buffers = ctx.checked("pinhole setup", || {
+            Buffers::new(
                 &ctx.device,
-                &gpu_params,
                 &gpu_samples(&samples, params.epsilon_scale as f32),
-            );
-            Ok::<_, caustics_gpu::GpuError>((buffers, map))
-        })??;
+            )
+        })?;
 
         let bvh_bindings: [(&str, &dyn caustics_gpu::pass::Bindable); 2] =
             [("bvh_nodes", &bvh.nodes), ("bvh_triangles", &bvh.triangles)];
@@ -641,14 +640,7 @@ impl Pinhole {
         let shader = Shader::new(ctx, "pinhole prepare.wgsl", pass_source(PREPARE_WGSL))?;
         let prepare = ComputePass::builder(ctx, "pinhole/prepare_samples", &shader)
             .frame(renderer)
-            .bind(
-                1,
-                &[
-                    ("params", &buffers.params),
-                    ("samples", &buffers.samples),
-                    ("sample_light", &buffers.sample_light),
-                ],
-            )
+            .caller_group(1)
             .bind(BVH_GROUP, &bvh_bindings)
             .kernels(&["prepare_samples"])
             .build()?;
@@ -658,28 +650,78 @@ impl Pinhole {
         let shader = Shader::new(ctx, "pinhole gather.wgsl", pass_source(GATHER_WGSL))?;
         let gather = RasterPass::builder(ctx, "pinhole/gather", &shader, "vs_gather")
             .frame(renderer)
-            .bind(
-                1,
-                &[
-                    ("params", &buffers.params),
-                    ("samples", &buffers.samples),
-                    ("sample_light", &buffers.sample_light),
-                    ("counters", &buffers.counters),
-                    ("light_map", &map.view),
-                    ("light_sampler", &map.sampler),
-                ],
-            )
+            .caller_group(1)
             .bind(BVH_GROUP, &bvh_bindings)
             .fragment("fs_gather", &[Some(additive_hdr_target())])
             .counted()
             .build()?;
+        let no_group = |pass: &str| caustics_gpu::GpuError::Invalid(format!("{pass}: no group 1"));
+        let (prepare_schema, gather_schema) = (
+            prepare.schema(1).ok_or_else(|| no_group(prepare.name()))?,
+            gather.schema(1).ok_or_else(|| no_group(gather.name()))?,
+        );
+
+        let mut bytes = buffers.bytes();
+        let mut lights = Vec::with_capacity(scene.lights.len());
+        for (index, light) in scene.lights.iter().enumerate() {
+            let disc = LightDisc::new(light, centre, params.light_angle as f32);
+            let mut gpu_params = gpu_params(
+                params,
+                generator as u32,
+                mode.code(),
+                sample_count,
+                index,
+                &disc,
+            );
+            let (light_buffers, map) = ctx.checked("pinhole setup", || {
+                // The light's map: an environment's own lat-long map, else the +Z face
+                // of the light's cube map, each with its mip chain.
+                let map = match light {
+                    Light::Environment { map, scale } => {
+                        let (texture, peak) = LightMap::environment(ctx, map)?;
+                        gpu_params.environment = 1;
+                        gpu_params.env_scale = (*scale * peak).extend(0.0).to_array();
+                        texture
+                    }
+                    _ => LightMap::new(ctx, params.cube_size, disc.alpha)?,
+                };
+                let light_buffers = LightBuffers::new(&ctx.device, &gpu_params, sample_count);
+                Ok::<_, caustics_gpu::GpuError>((light_buffers, map))
+            })??;
+            let prepare_group = prepare_schema.bind(
+                &ctx.device,
+                &[
+                    ("params", &light_buffers.params),
+                    ("samples", &buffers.samples),
+                    ("sample_light", &light_buffers.sample_light),
+                ],
+            )?;
+            let gather_group = gather_schema.bind(
+                &ctx.device,
+                &[
+                    ("params", &light_buffers.params),
+                    ("samples", &buffers.samples),
+                    ("sample_light", &light_buffers.sample_light),
+                    ("counters", &buffers.counters),
+                    ("light_map", &map.view),
+                    ("light_sampler", &map.sampler),
+                ],
+            )?;
+            bytes += light_buffers.bytes() + map.bytes;
+            lights.push(PinholeLight {
+                prepare_group,
+                gather_group,
+                _map: map,
+            });
+        }
 
         let cam = &scene.camera;
         Ok(Self {
             prepare,
             gather,
-            bytes: buffers.bytes() + map.bytes,
-            _memory: (map, samples_memory),
+            lights,
+            bytes,
+            _memory: samples_memory,
             counters: buffers.counters,
             sample_count,
             batches: sample_count.div_ceil(params.samples_per_pass),
@@ -692,12 +734,19 @@ impl CausticsMethod for Pinhole {
     fn record(&mut self, frame: &mut Frame<'_>) -> Result<(), MethodError> {
         let renderer = frame.renderer;
         frame.encoder.clear_buffer(&self.counters, 0, None);
-        self.prepare
-            .begin(frame)?
-            .dispatch("prepare_samples", [self.sample_count.div_ceil(64), 1, 1])?;
+        {
+            let mut pass = self.prepare.begin(frame)?;
+            for light in &self.lights {
+                pass.set_bind_group(1, &light.prepare_group, &[]);
+                pass.dispatch("prepare_samples", [self.sample_count.div_ceil(64), 1, 1])?;
+            }
+        }
         let attachments = [load_attachment(&renderer.targets().surface.view)];
         let mut pass = self.gather.begin(frame, &attachments, None)?;
-        pass.draw(0..3, 0..self.batches);
+        for light in &self.lights {
+            pass.set_bind_group(1, &light.gather_group, &[]);
+            pass.draw(0..3, 0..self.batches);
+        }
         Ok(())
     }
 
@@ -711,7 +760,10 @@ impl CausticsMethod for Pinhole {
         let wide = |lo: usize| c[lo] as u64 | (c[lo + 1] as u64) << 32;
         let mut out = Counters::new();
         out.insert("samples".into(), self.sample_count as u64);
-        out.insert("passes".into(), self.batches as u64);
+        out.insert(
+            "passes".into(),
+            u64::from(self.batches) * self.lights.len() as u64,
+        );
         out.insert("receiver_fragments".into(), c[0] as u64);
         out.insert("sample_pixel_pairs".into(), wide(1));
         out.insert("texture_fetches".into(), wide(3));

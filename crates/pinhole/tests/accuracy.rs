@@ -582,3 +582,19 @@ fn the_ring_under_an_environment_map_is_close_to_the_cpu_reference() {
         },
     );
 }
+
+/// Several lights: the ball under two suns renders the sum of the ball under each sun
+/// alone (one light map and one prepare/gather pair per light), counters summed.
+#[test]
+fn pinhole_lights_add_up() {
+    caustics_testing::lights::lights_add_up(
+        &caustics_method::registry_entry::<pinhole::Pinhole>(),
+        serde_json::json!({"samples": 200, "cube_size": 64}),
+        &[
+            "passes",
+            "sample_pixel_pairs",
+            "visibility_tests",
+            "texture_fetches",
+        ],
+    );
+}

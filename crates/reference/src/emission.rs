@@ -476,12 +476,7 @@ impl Crossing {
             })
             .collect();
         let cdf = cumulative(discs.iter().map(|d| PI * d.radius * d.radius));
-        let start = bounds
-            .corners()
-            .iter()
-            .map(|k| k.dot(dir))
-            .fold(f32::INFINITY, f32::min)
-            - 1.0;
+        let start = bounds.directional_start(dir);
         Crossing {
             dir,
             b1,

@@ -242,6 +242,19 @@ impl Aabb {
     pub fn contains(&self, p: Vec3) -> bool {
         p.cmpge(self.min).all() && p.cmple(self.max).all()
     }
+
+    /// Where a directional light along the unit `dir` starts its light for a scene of
+    /// these bounds: the distance along `dir` of a plane 1 m before the box's nearest
+    /// corner, so the whole box lies ahead of it. The reference emits its directional
+    /// photons from this plane and the methods with a medium count extinction from it,
+    /// so both agree on the light's path length.
+    pub fn directional_start(&self, dir: Vec3) -> f32 {
+        self.corners()
+            .iter()
+            .map(|c| c.dot(dir))
+            .fold(f32::INFINITY, f32::min)
+            - 1.0
+    }
 }
 
 impl Shape {

@@ -259,3 +259,20 @@ fn scoring_reuses_the_generated_beams_exactly() {
         "a black volume caustic proves nothing"
     );
 }
+
+/// Several lights: a ball under two suns renders the sum of the ball under each sun
+/// alone (the pipeline runs once per light into the same caustic), counters summed.
+#[test]
+fn static_grid_lights_add_up() {
+    caustics_testing::lights::lights_add_up(
+        &caustics_method::registry_entry::<static_grid::StaticGrid>(),
+        serde_json::json!({"light_resolution": 256, "grid": 32}),
+        &[
+            "beams",
+            "base_triangles",
+            "candidates",
+            "hull_triangles",
+            "dropped_discontinuity",
+        ],
+    );
+}

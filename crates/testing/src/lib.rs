@@ -26,6 +26,8 @@
 //!   their bounds look alike);
 //! - [`photon_hits`] holds the checks the two photon-hit methods share (light leak,
 //!   determinism, parameter errors), each taking the method's registry entry;
+//!   [`lights`] those of scenes with several lights (the caustic is the sum of each
+//!   light's alone);
 //! - [`Artifacts::ensure`] checks a bound and, when it fails, writes `<name>-actual`,
 //!   `<name>-expected` and `<name>-difference` images and says where (STYLE 9).
 //!
@@ -62,6 +64,7 @@
 mod artifacts;
 mod compare;
 mod gpu;
+pub mod lights;
 pub mod photon_hits;
 mod reference;
 mod scenes;

@@ -10,7 +10,8 @@ use caustics_metrics::HdrImage;
 use caustics_scene::{Scene, Vec3};
 use photon_hits::CausticMap;
 
-use crate::{Gpu, Measured, builtin, plane_hit};
+use crate::lights::{TWO_SUNS, balls_under_suns};
+use crate::{builtin, plane_hit};
 
 /// Small settings of the photon-hit tests, `extra` added: 48² photon image, 128² cube
 /// faces.
@@ -22,14 +23,7 @@ pub fn small(extra: serde_json::Value) -> serde_json::Value {
     p
 }
 
-/// Renders `scene` through the registry entry `info` (JSON `params`): the image and the
-/// measured frames.
-pub fn run(info: &MethodInfo, scene: Scene, params: serde_json::Value) -> (HdrImage, Measured) {
-    let gpu = Gpu::new(scene);
-    let mut method = gpu.method(info, params);
-    let measured = gpu.measure(method.as_mut(), 0, 1);
-    (gpu.surface(), measured)
-}
+pub use crate::lights::render as run;
 
 /// Pixels seeing the floor (y = -3) under the table of `light_leak`: hidden from the
 /// glass ball by the table, and out of reach of the light passing the table's edge (it
@@ -155,33 +149,6 @@ pub fn flux_on_floor(map: &CausticMap, atlas: &[f32], floor_y: f32) -> [f64; 3] 
     total
 }
 
-/// Glass balls at `x` (each 0.5 m, 1 m above a floor) under directional lights of
-/// `directions`: the scene of [`pairs_add_up`].
-fn balls_under_suns(x: &[f64], directions: &[[f64; 3]]) -> Scene {
-    let objects: Vec<serde_json::Value> = x
-        .iter()
-        .map(|x| serde_json::json!({"shape": {"type": "sphere", "center": [x, 1.0, 0], "radius": 0.5}, "material": "glass"}))
-        .chain([serde_json::json!({"shape": {"type": "quad", "center": [0, 0, 0], "normal": [0, 1, 0], "size": [12, 12]}, "material": "floor"})])
-        .collect();
-    let lights: Vec<serde_json::Value> = directions
-        .iter()
-        .map(
-            |d| serde_json::json!({"type": "directional", "direction": d, "irradiance": [1, 1, 1]}),
-        )
-        .collect();
-    crate::scene(&serde_json::json!({
-        "name": "balls_under_suns",
-        "description": "glass balls far apart under one or two suns",
-        "camera": {"eye": [0, 4, 5], "target": [0, 0, 0], "up": [0, 1, 0], "fov_y_deg": 60, "width": 64, "height": 48},
-        "lights": lights,
-        "materials": {
-            "glass": {"type": "dielectric", "ior": 1.5},
-            "floor": {"type": "diffuse", "albedo": [0.8, 0.8, 0.8]}
-        },
-        "objects": objects
-    }))
-}
-
 /// One photon hit image per (light, generator) pair (Umenhoffer et al. §4.1), whose
 /// camera passes add up: two glass balls 4 m apart render the sum of each alone, and
 /// one ball under two suns the sum of each sun alone, within 1e-3 of the image's light
@@ -189,53 +156,19 @@ fn balls_under_suns(x: &[f64], directions: &[[f64; 3]]) -> Scene {
 /// other ball in a pair's receivers' distance map, which none of its light meets), with
 /// the counters of the parts summed.
 pub fn pairs_add_up(info: &MethodInfo) {
-    let (a, b) = ([0.2, -1.0, 0.1], [-0.3, -1.0, 0.0]);
-    for (name, both, parts) in [
-        (
-            "two balls",
-            balls_under_suns(&[-2.0, 2.0], &[a]),
-            [
-                balls_under_suns(&[-2.0], &[a]),
-                balls_under_suns(&[2.0], &[a]),
-            ],
-        ),
-        (
-            "two suns",
-            balls_under_suns(&[0.0], &[a, b]),
-            [
-                balls_under_suns(&[0.0], &[a]),
-                balls_under_suns(&[0.0], &[b]),
-            ],
-        ),
-    ] {
-        let params = small(serde_json::json!({}));
-        let (whole, rw) = run(info, both, params.clone());
-        let [(p, rp), (q, rq)] = parts.map(|s| run(info, s, params.clone()));
-        let mut diff = 0.0f64;
-        for ((w, p), q) in whole.pixels.iter().zip(&p.pixels).zip(&q.pixels) {
-            diff += (0..3)
-                .map(|c| (w[c] as f64 - p[c] as f64 - q[c] as f64).abs())
-                .sum::<f64>();
-        }
-        let total: f64 = whole
-            .pixels
-            .iter()
-            .map(|w| w.iter().map(|&v| v as f64).sum::<f64>())
-            .sum();
-        eprintln!(
-            "{name}: |whole - sum of parts| / whole = {:.2e} ({total:.3} summed)",
-            diff / total
-        );
-        assert!(
-            total > 0.0 && diff / total < 1e-3,
-            "{name}: {diff} of {total}"
-        );
-        for counter in ["photon_texels", "photon_hits"] {
-            assert_eq!(
-                rw.counter(counter),
-                rp.counter(counter) + rq.counter(counter),
-                "{name}: {counter}"
-            );
-        }
-    }
+    let params = small(serde_json::json!({}));
+    let counters = ["photon_texels", "photon_hits"];
+    let [a, _] = TWO_SUNS;
+    crate::lights::adds_up(
+        info,
+        &params,
+        "two balls",
+        balls_under_suns(&[-2.0, 2.0], &[a]),
+        [
+            balls_under_suns(&[-2.0], &[a]),
+            balls_under_suns(&[2.0], &[a]),
+        ],
+        &counters,
+    );
+    crate::lights::lights_add_up(info, params, &counters);
 }

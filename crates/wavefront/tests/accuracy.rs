@@ -490,3 +490,14 @@ fn scoring_reuses_the_traced_sheets_exactly() {
         "a black caustic proves nothing"
     );
 }
+
+/// Several lights: the ball under two suns renders the sum of the ball under each sun
+/// alone (a sheet per light and generator), counters summed.
+#[test]
+fn wavefront_lights_add_up() {
+    caustics_testing::lights::lights_add_up(
+        &caustics_method::registry_entry::<wavefront::Wavefront>(),
+        serde_json::json!({"grid": 64}),
+        &["sheets", "source_vertices"],
+    );
+}
