@@ -272,6 +272,10 @@ fn trace_path(uv: vec2<f32>, family: u32) -> PathEnd {
     e.light_dir = ray.dir;
     // Internal reflections the family takes in the first object, and the rest of the
     // `bounces` budget for the other further events.
+    // The Fresnel reflection is a dielectric's (a mirror's reflection is the main path).
+    if family == FAMILY_REFLECTED && u.specular[slot].kind != MAT_DIELECTRIC {
+        return e;
+    }
     var internal = 0u;
     if family >= FAMILY_INTERNAL {
         let first = u.specular[slot];
