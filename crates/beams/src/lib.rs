@@ -429,14 +429,15 @@ impl HullRaster {
         light: &LightBuffers,
     ) -> Result<wgpu::BindGroup, GpuError> {
         match self {
-            Self::Hardware(pass) => group_one(pass.name(), pass.schema(1))?
+            Self::Hardware(pass) => pass
+                .caller_schema(1)?
                 .bind(device, &[("u", &light.uniforms), ("beams", &light.beams)]),
             Self::Compute {
                 rasterize,
                 counts,
                 accumulator,
                 ..
-            } => group_one(rasterize.name(), rasterize.schema(1))?.bind(
+            } => rasterize.caller_schema(1)?.bind(
                 device,
                 &[
                     ("u", &light.uniforms),
@@ -453,14 +454,6 @@ impl HullRaster {
 struct PassNames {
     light_gbuffer: String,
     impostors: String,
-}
-
-/// Group 1 of the pass `pass`: each light's resources, bound by the caller.
-fn group_one<'a>(
-    pass: &str,
-    schema: Option<&'a caustics_gpu::pass::BindGroupSchema>,
-) -> Result<&'a caustics_gpu::pass::BindGroupSchema, GpuError> {
-    schema.ok_or_else(|| GpuError::Invalid(format!("pass {pass}: no group 1")))
 }
 
 /// A uniform buffer holding `contents`.
@@ -763,7 +756,7 @@ impl BeamMethod {
             let light_gbuffer = renderer.gbuffer_pass().light_gbuffer(ctx, view)?;
             let uniforms = BeamUniforms::new(scene, config, index, view, slots, &atlas);
             let lb = LightBuffers::new(device, config, &uniforms);
-            let generate_group = group_one(generate.name(), generate.schema(1))?.bind(
+            let generate_group = generate.caller_schema(1)?.bind(
                 device,
                 &[
                     ("u", &lb.uniforms),
@@ -786,7 +779,7 @@ impl BeamMethod {
             let raster_group = rasterize.light_group(device, &lb)?;
             let orphan_group = match &orphan_points {
                 Some(pass) => Some(
-                    group_one(pass.name(), pass.schema(1))?
+                    pass.caller_schema(1)?
                         .bind(device, &[("u", &lb.uniforms), ("orphans", &lb.orphans)])?,
                 ),
                 None => None,
@@ -934,10 +927,9 @@ fn indirect_args_group(
     generate: &ComputePass,
     buffer: &wgpu::Buffer,
 ) -> Result<wgpu::BindGroup, MethodError> {
-    let schema = generate.schema(2).ok_or_else(|| {
-        caustics_gpu::GpuError::Invalid("beams generate.wgsl: no group 2 (indirect_args)".into())
-    })?;
-    Ok(schema.bind(device, &[("indirect_args", buffer)])?)
+    Ok(generate
+        .caller_schema(2)?
+        .bind(device, &[("indirect_args", buffer)])?)
 }
 
 impl BeamMethod {

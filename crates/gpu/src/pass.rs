@@ -622,6 +622,16 @@ impl SetBindGroup for wgpu::RenderPass<'_> {
     }
 }
 
+fn caller_schema<'a>(
+    pass: &str,
+    schemas: &'a BTreeMap<u32, BindGroupSchema>,
+    group: u32,
+) -> Result<&'a BindGroupSchema, GpuError> {
+    schemas.get(&group).ok_or_else(|| {
+        GpuError::Invalid(format!("pass {pass}: its shader declares no group {group}"))
+    })
+}
+
 /// A compute pass: one profiling scope, its bind groups and one pipeline per kernel
 /// (entry point) of one shader.
 pub struct ComputePass {
@@ -709,6 +719,12 @@ impl ComputePass {
     /// The reflected layout of `group` (for bind groups the caller sets).
     pub fn schema(&self, group: u32) -> Option<&BindGroupSchema> {
         self.schemas.get(&group)
+    }
+
+    /// [`Self::schema`] of a group the caller sets (e.g. one bind group per light),
+    /// or an error naming the pass when its shader declares no such group.
+    pub fn caller_schema(&self, group: u32) -> Result<&BindGroupSchema, GpuError> {
+        caller_schema(&self.name, &self.schemas, group)
     }
 
     /// Opens the pass in `frame` (profiled under its name) with its bind groups set.
@@ -932,6 +948,12 @@ impl RasterPass {
     /// The reflected layout of `group` (for bind groups the caller sets).
     pub fn schema(&self, group: u32) -> Option<&BindGroupSchema> {
         self.schemas.get(&group)
+    }
+
+    /// [`Self::schema`] of a group the caller sets (e.g. one bind group per light),
+    /// or an error naming the pass when its shader declares no such group.
+    pub fn caller_schema(&self, group: u32) -> Result<&BindGroupSchema, GpuError> {
+        caller_schema(&self.name, &self.schemas, group)
     }
 
     /// Opens the pass in `frame` (profiled under its name) on `color` (and `depth`),

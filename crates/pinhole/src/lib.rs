@@ -655,11 +655,7 @@ impl Pinhole {
             .fragment("fs_gather", &[Some(additive_hdr_target())])
             .counted()
             .build()?;
-        let no_group = |pass: &str| caustics_gpu::GpuError::Invalid(format!("{pass}: no group 1"));
-        let (prepare_schema, gather_schema) = (
-            prepare.schema(1).ok_or_else(|| no_group(prepare.name()))?,
-            gather.schema(1).ok_or_else(|| no_group(gather.name()))?,
-        );
+        let (prepare_schema, gather_schema) = (prepare.caller_schema(1)?, gather.caller_schema(1)?);
 
         let mut bytes = buffers.bytes();
         let mut lights = Vec::with_capacity(scene.lights.len());

@@ -368,12 +368,12 @@ impl Wavefront {
             None
         };
         let (trace_schema, classify_schema, splat_schema) = (
-            group_one(trace.schema(1), "trace")?,
-            group_one(classify.schema(1), "classify")?,
-            group_one(splat.schema(1), "splat")?,
+            trace.caller_schema(1)?,
+            classify.caller_schema(1)?,
+            splat.caller_schema(1)?,
         );
         let orphan_schema = match &orphans {
-            Some(pass) => Some(group_one(pass.schema(1), "orphans")?),
+            Some(pass) => Some(pass.caller_schema(1)?),
             None => None,
         };
 
@@ -523,18 +523,6 @@ impl Wavefront {
             _memory: memory,
         })
     }
-}
-
-/// The layout of a pass's group 1 (each sheet binds its own buffers there).
-fn group_one<'a>(
-    schema: Option<&'a BindGroupSchema>,
-    pass: &str,
-) -> Result<&'a BindGroupSchema, MethodError> {
-    schema.ok_or_else(|| {
-        MethodError::Gpu(caustics_gpu::GpuError::Invalid(format!(
-            "wavefront {pass}.wgsl declares no group 1"
-        )))
-    })
 }
 
 /// The per-sheet bind groups' layouts and the counters every sheet adds to.
