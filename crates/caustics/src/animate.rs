@@ -240,8 +240,13 @@ pub fn run_animated(o: &RunOptions, spec: &AnimateSpec, scene: Scene) -> Result<
                 .with_context(|| format!("--animate: posing {} at {t} s", scene.name))
         })
         .collect::<Result<_>>()?;
+    // The method may see representative lights; the references are of the posed scene.
+    let mut representative_lights = None;
     for s in &posed {
-        if let Err(reason) = info.supports(s, &parsed) {
+        let method_scene;
+        (method_scene, representative_lights) =
+            crate::run::scene_for_method(&info, s, o.representative_lights);
+        if let Err(reason) = info.supports(&method_scene, &parsed) {
             return Ok(RunOutcome::Skipped {
                 reason: format!("at {} s: {}", s.time, reason.0),
             });
@@ -270,7 +275,10 @@ pub fn run_animated(o: &RunOptions, spec: &AnimateSpec, scene: Scene) -> Result<
             None
         };
         let rebuild_started = std::time::Instant::now();
-        let gpu_scene = GpuScene::upload(&ctx, Arc::new(posed_scene), Default::default())?;
+        // Part of the rebuild: a moving sphere light moves its representative lights.
+        let (method_scene, _) =
+            crate::run::scene_for_method(&info, &posed_scene, o.representative_lights);
+        let gpu_scene = GpuScene::upload(&ctx, Arc::new(method_scene), Default::default())?;
         let renderer = Renderer::new(&ctx, gpu_scene, RendererOptions::default())?;
         let mut method = (info.create)(&ctx, &renderer, &parsed)?;
         let rebuild_ms = rebuild_started.elapsed().as_secs_f64() * 1e3;
@@ -393,6 +401,7 @@ pub fn run_animated(o: &RunOptions, spec: &AnimateSpec, scene: Scene) -> Result<
             width: w,
             height: h,
             time_s: Some(spec.start_s),
+            representative_lights,
         },
         method: MethodRun {
             name: o.method.clone(),

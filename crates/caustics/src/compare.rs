@@ -663,6 +663,11 @@ fn differing_inputs(
         b.scene.hash.clone(),
         n.scene.hash.clone(),
     );
+    check(
+        "representative lights",
+        format!("{:?}", b.scene.representative_lights),
+        format!("{:?}", n.scene.representative_lights),
+    );
     check("method", b.method.name.clone(), n.method.name.clone());
     check(
         "parameters",

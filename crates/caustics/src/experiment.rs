@@ -236,6 +236,30 @@ pub struct RunGroup {
     /// Overrides the experiment's warm-up.
     #[serde(default)]
     pub warmup: Option<u32>,
+    /// Renders each extended light a method does not take as this many representative
+    /// lights (`caustics run --representative-lights`, 1..=64), or each of a list of
+    /// counts (swept like a parameter); absent: such a method declines.
+    #[serde(default)]
+    pub representative_lights: Option<Counts>,
+}
+
+/// One count or a list of counts to sweep.
+#[derive(Clone, Debug, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(untagged)]
+pub enum Counts {
+    /// One count.
+    One(u32),
+    /// Each of these.
+    Sweep(Vec<u32>),
+}
+
+impl Counts {
+    fn values(&self) -> Vec<u32> {
+        match self {
+            Counts::One(n) => vec![*n],
+            Counts::Sweep(v) => v.clone(),
+        }
+    }
 }
 
 /// A list of names, or `"*"` for all.
@@ -298,8 +322,11 @@ pub struct RunSpec {
     pub method: String,
     /// Parameters (a JSON object; the method's defaults fill in the rest).
     pub params: serde_json::Map<String, serde_json::Value>,
-    /// `key=value` pairs, sorted, or `default`: the run's folder name.
+    /// `key=value` pairs, sorted, or `default`: the run's folder name (with
+    /// `representative_lights=N` when the group sets it).
     pub slug: String,
+    /// The group's `representative_lights` (`caustics run --representative-lights`).
+    pub representative_lights: Option<u32>,
     /// Measured frames.
     pub frames: u32,
     /// Warm-up frames.
@@ -314,6 +341,23 @@ impl RunSpec {
     pub fn key(&self) -> String {
         format!("{}/{}/{}", self.scene.name, self.method, self.slug)
     }
+
+    /// The parameters as summaries and figures show them: the method's, and
+    /// `representative_lights` when the group sets it (so a figure can sweep it).
+    pub fn shown_params(&self) -> serde_json::Map<String, serde_json::Value> {
+        shown_params(&self.params, self.representative_lights)
+    }
+}
+
+fn shown_params(
+    params: &serde_json::Map<String, serde_json::Value>,
+    representative_lights: Option<u32>,
+) -> serde_json::Map<String, serde_json::Value> {
+    let mut shown = params.clone();
+    if let Some(n) = representative_lights {
+        shown.insert("representative_lights".into(), n.into());
+    }
+    shown
 }
 
 /// A loaded, validated experiment.
@@ -531,6 +575,26 @@ impl Experiment {
             let frames = group.frames.unwrap_or(def.frames);
             let warmup = group.warmup.unwrap_or(def.warmup);
             check_frames(&frames, warmup, &at(""), &invalid)?;
+            let max_lights = caustics_scene::MAX_REPRESENTATIVE_LIGHTS;
+            let light_counts: Vec<Option<u32>> = match &group.representative_lights {
+                None => vec![None],
+                Some(counts) => {
+                    let values = counts.values();
+                    if let Some(n) = values.iter().find(|n| !(1..=max_lights).contains(*n)) {
+                        return Err(invalid(
+                            &at("representative_lights"),
+                            format!("expected integers in 1..={max_lights}, got {n}"),
+                        ));
+                    }
+                    if values.is_empty() {
+                        return Err(invalid(
+                            &at("representative_lights"),
+                            "expected a count or a non-empty list of counts".into(),
+                        ));
+                    }
+                    values.into_iter().map(Some).collect()
+                }
+            };
             let label = group.label.clone().unwrap_or_else(|| format!("group{g}"));
             let scenes = select_scenes(&group.scenes, base, &at("scenes"), &invalid)?;
             let methods = select_methods(&group.methods, &at("methods"), &invalid)?;
@@ -550,7 +614,7 @@ impl Experiment {
                     .get(&scene.name)
                     .copied()
                     .unwrap_or(def.score_grid);
-                if runs.len() + methods.len() * param_sets.len() > MAX_RUNS {
+                if runs.len() + methods.len() * param_sets.len() * light_counts.len() > MAX_RUNS {
                     return Err(invalid(
                         &at("params"),
                         format!("the experiment makes more than {MAX_RUNS} runs; split it"),
@@ -559,7 +623,10 @@ impl Experiment {
                 for method in &methods {
                     let info = registry::find(method)
                         .map_err(|e| invalid(&at("methods"), crate::error_text(&e)))?;
-                    for params in &param_sets {
+                    for (params, lights) in param_sets
+                        .iter()
+                        .flat_map(|p| light_counts.iter().map(move |n| (p, *n)))
+                    {
                         let value = serde_json::Value::Object(params.clone());
                         registry::parse_params(&info, &value).map_err(|e| {
                             invalid(
@@ -572,8 +639,9 @@ impl Experiment {
                             group: label.clone(),
                             scene: scene.clone(),
                             method: method.clone(),
-                            slug: slug(params),
+                            slug: slug(&shown_params(params, lights)),
                             params: params.clone(),
+                            representative_lights: lights,
                             frames,
                             warmup,
                             score_grid,

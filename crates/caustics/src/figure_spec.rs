@@ -333,7 +333,8 @@ pub struct RunInfo {
     pub method: String,
     /// Group label.
     pub group: String,
-    /// The given parameters over the method's defaults.
+    /// The given parameters over the method's defaults (and the group's
+    /// `representative_lights`, [`RunSpec::shown_params`]).
     pub params: Params,
 }
 
@@ -358,7 +359,7 @@ impl Defaults {
     /// The run as a figure sees it.
     pub fn run(&mut self, spec: &RunSpec) -> RunInfo {
         let mut params = self.of(&spec.method).clone();
-        for (k, v) in &spec.params {
+        for (k, v) in &spec.shown_params() {
             params.insert(k.clone(), v.clone());
         }
         RunInfo {
@@ -1186,7 +1187,9 @@ fn selectors(
         methods.sort();
         methods.dedup();
         for k in s.params.keys() {
-            let ok = methods.iter().any(|m| defaults.of(m).contains_key(k));
+            // A method's parameter, or the harness's `representative_lights` of a group.
+            let ok = methods.iter().any(|m| defaults.of(m).contains_key(k))
+                || runs.iter().any(|r| r.params.contains_key(k));
             if !ok {
                 let listed: Vec<String> = methods
                     .iter()

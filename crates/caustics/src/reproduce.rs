@@ -685,6 +685,7 @@ fn run_one(e: &Experiment, spec: &RunSpec, args: &ReproduceArgs, out: &Path) -> 
         time: None,
         animate: None,
         reference_every: None,
+        representative_lights: spec.representative_lights.unwrap_or(0),
     };
     let status = |status: &str, dir: Option<String>, reason: Option<String>| RunStatus {
         index: spec.index,

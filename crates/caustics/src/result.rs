@@ -160,6 +160,11 @@ pub struct SceneInfo {
     /// for a still scene, which is the same at every instant.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub time_s: Option<f32>,
+    /// N when the method rendered each extended light it does not take as N
+    /// representative lights (`--representative-lights`); absent when it rendered the
+    /// scene's own lights. The hash and the reference are the scene's own.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub representative_lights: Option<u32>,
 }
 
 /// The method as run.

@@ -104,6 +104,13 @@ pub struct RunOptions {
     /// sequence, so 4 scored instants).
     #[arg(long, value_name = "K", requires = "animate")]
     pub reference_every: Option<u32>,
+    /// Render each extended light the method does not take (a sphere or environment
+    /// light, outside pinhole) as at most N lights without extent: a sphere light as N
+    /// point lights inside its ball, an environment by median cut as N directional
+    /// lights (`Light::representative`). Errors stay against the reference of the true
+    /// light. 0: such a method declines the scene.
+    #[arg(long, value_name = "N", default_value_t = 0)]
+    pub representative_lights: u32,
     /// Also time the frame without instrumentation: after each timed frame, the same
     /// frame again with no timestamp or statistics queries, and result.json's
     /// `instrumentation` compares their CPU wall times (record, submit, wait).
@@ -214,6 +221,13 @@ pub(crate) fn validate_options(o: &RunOptions) -> Result<()> {
             o.score_grid
         );
     }
+    let max_lights = caustics_scene::MAX_REPRESENTATIVE_LIGHTS;
+    if o.representative_lights > max_lights {
+        bail!(
+            "--representative-lights: expected an integer in 0..={max_lights} (0: decline extended lights), got {}",
+            o.representative_lights
+        );
+    }
     if let Some(r) = o.reference.as_ref().filter(|r| !r.is_file()) {
         bail!("--reference {}: no such file", r.display());
     }
@@ -247,6 +261,33 @@ pub fn run(o: &RunOptions) -> Result<RunOutcome> {
     run_scene(o, scene)
 }
 
+/// The scene the method renders: `scene` with each extended light the method does not
+/// take swapped for `count` representative lights ([`Light::representative`]), and
+/// `Some(count)` when any was; `scene` itself (and `None`) when `count` is 0 or every
+/// light is one the method takes.
+///
+/// [`Light::representative`]: caustics_scene::Light::representative
+pub(crate) fn scene_for_method(
+    info: &caustics_method::MethodInfo,
+    scene: &Scene,
+    count: u32,
+) -> (Scene, Option<u32>) {
+    use caustics_scene::Light;
+    let caps = &info.capabilities;
+    let replace = |l: &Light| match l {
+        Light::Sphere { .. } => !caps.sphere_light,
+        Light::Environment { .. } => !caps.environment_light,
+        _ => false,
+    };
+    if count == 0 || !scene.lights.iter().any(replace) {
+        return (scene.clone(), None);
+    }
+    (
+        scene.with_representative_lights(count, replace),
+        Some(count),
+    )
+}
+
 /// [`run`] on a scene already loaded (and possibly changed, e.g. its camera's
 /// resolution by `caustics reproduce`); `o.scene` is not read.
 pub fn run_scene(o: &RunOptions, scene: Scene) -> Result<RunOutcome> {
@@ -256,7 +297,10 @@ pub fn run_scene(o: &RunOptions, scene: Scene) -> Result<RunOutcome> {
     let params = given_params(o)?;
     // Parsed and checked once; the method receives its own typed struct.
     let parsed = (info.parse)(&params)?;
-    if let Err(reason) = info.supports(&scene, &parsed) {
+    // The method may see representative lights; the reference is always of `scene`.
+    let (method_scene, representative_lights) =
+        scene_for_method(&info, &scene, o.representative_lights);
+    if let Err(reason) = info.supports(&method_scene, &parsed) {
         return Ok(RunOutcome::Skipped { reason: reason.0 });
     }
     let reference = load_reference(o, &scene, info.capabilities.volume)?;
@@ -274,8 +318,7 @@ pub fn run_scene(o: &RunOptions, scene: Scene) -> Result<RunOutcome> {
             "note: software adapter: absolute times are CPU times; compare ratios measured in one run"
         );
     }
-    let scene = Arc::new(scene);
-    let gpu_scene = GpuScene::upload(&ctx, scene.clone(), Default::default())?;
+    let gpu_scene = GpuScene::upload(&ctx, Arc::new(method_scene), Default::default())?;
     let renderer = Renderer::new(&ctx, gpu_scene, RendererOptions::default())?;
     let mut method = (info.create)(&ctx, &renderer, &parsed)?;
 
@@ -486,6 +529,7 @@ pub fn run_scene(o: &RunOptions, scene: Scene) -> Result<RunOutcome> {
             width: w,
             height: h,
             time_s: scene.is_animated().then_some(scene.time),
+            representative_lights,
         },
         method: MethodRun {
             name: o.method.clone(),

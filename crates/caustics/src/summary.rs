@@ -327,7 +327,7 @@ pub fn build(out: &Path, e: &Experiment, m: &Manifest) -> Result<Summary> {
             group: spec.group.clone(),
             scene: spec.scene.name.clone(),
             method: spec.method.clone(),
-            params: spec.params.clone(),
+            params: spec.shown_params(),
             width: spec.scene.camera.width,
             height: spec.scene.camera.height,
             status: st.status.clone(),

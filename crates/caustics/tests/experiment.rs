@@ -123,6 +123,49 @@ fn sweeps_expand_to_the_cartesian_product_and_scale_applies() {
 }
 
 #[test]
+fn representative_light_counts_sweep_into_their_own_runs() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let p = write(
+        dir.path(),
+        "lights",
+        r#"{"name": "lights", "runs": [
+              {"scenes": ["ring"], "methods": ["wavefront"], "params": {"grid": [64, 128]},
+               "representative_lights": [1, 16]},
+              {"label": "one", "scenes": ["ring"], "methods": ["splatting"], "representative_lights": 4}
+            ]}"#,
+    );
+    let e = Experiment::load(&p, 1.0).expect("valid");
+    let keys: Vec<String> = e.runs.iter().map(|r| r.key()).collect();
+    assert_eq!(
+        keys,
+        [
+            "ring/wavefront/grid=64,representative_lights=1",
+            "ring/wavefront/grid=64,representative_lights=16",
+            "ring/wavefront/grid=128,representative_lights=1",
+            "ring/wavefront/grid=128,representative_lights=16",
+            "ring/splatting/representative_lights=4",
+        ]
+    );
+    // The method gets its own parameters only; summaries show the count beside them.
+    assert_eq!(e.runs[1].representative_lights, Some(16));
+    assert!(!e.runs[1].params.contains_key("representative_lights"));
+    assert_eq!(
+        e.runs[1].shown_params().get("representative_lights"),
+        Some(&serde_json::json!(16))
+    );
+    for (value, expected) in [("0", "got 0"), ("65", "got 65"), ("[]", "non-empty")] {
+        let e = load_err(&format!(
+            r#"{{"name": "x", "runs": [{{"scenes": ["ring"], "methods": ["wavefront"],
+                 "representative_lights": {value}}}]}}"#
+        ));
+        assert!(
+            e.contains("runs[0].representative_lights") && e.contains(expected),
+            "{value}: {e}"
+        );
+    }
+}
+
+#[test]
 fn stars_select_every_scene_and_method() {
     let dir = tempfile::tempdir().expect("tempdir");
     let p = write(

@@ -10,8 +10,11 @@
 
 use crate::{GpuContext, GpuError};
 
-/// Most passes one frame may open.
-pub const MAX_PASSES_PER_FRAME: u32 = 64;
+/// Most passes one frame may open: every light adds its shadow and direct passes and
+/// the methods' per-light passes, and a scene may bring 64 representative lights per
+/// extended light (caustic triangles under 64 point lights open over 1,024: six cube
+/// faces each). Two timestamps each fill wgpu's 4,096 queries per set.
+pub const MAX_PASSES_PER_FRAME: u32 = 2048;
 /// Values of one pipeline-statistics query, in `STATISTICS` bit order.
 const STATS_PER_QUERY: u64 = 5;
 /// The statistics gathered (results come back in this bit order).

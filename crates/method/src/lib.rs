@@ -96,13 +96,13 @@ impl Capabilities {
                 Light::Spot { .. } => (self.spot_light, "spot"),
                 Light::Sphere { .. } if !self.sphere_light => {
                     return Err(Unsupported(format!(
-                        "lights[{i}] is a sphere area light: this method's light leaves one point (its photons, beams or wavefront start there), so an extended light would need many representative point lights; pinhole renders sphere lights (Wand & Straßer §5: \"extended light sources at no additional costs\")"
+                        "lights[{i}] is a sphere area light: this method's light leaves one point (its photons, beams or wavefront start there), so an extended light needs representative point lights (`--representative-lights N`, or an experiment group's `representative_lights`); pinhole renders sphere lights (Wand & Straßer §5: \"extended light sources at no additional costs\")"
                     )));
                 }
                 Light::Sphere { .. } => (true, "sphere"),
                 Light::Environment { .. } if !self.environment_light => {
                     return Err(Unsupported(format!(
-                        "lights[{i}] is an environment light: this method's light leaves one point or one direction (its photons, beams or wavefront start there); pinhole renders environment maps (Wand & Straßer's Fig. 6)"
+                        "lights[{i}] is an environment light: this method's light leaves one point or one direction (its photons, beams or wavefront start there), so an environment needs representative directional lights (`--representative-lights N`, or an experiment group's `representative_lights`); pinhole renders environment maps (Wand & Straßer's Fig. 6)"
                     )));
                 }
                 Light::Environment { .. } => (true, "environment"),

@@ -46,6 +46,7 @@ mod light;
 mod limits;
 mod mesh;
 mod raw;
+mod representative;
 mod shape;
 mod tessellate;
 mod validate;
@@ -64,6 +65,7 @@ pub use error::SceneError;
 pub use light::{EnvironmentMap, Light, Material, Medium, NamedMaterial};
 pub use limits::{Limits, MAX_COORDINATE, format_bytes, parse_mib};
 pub use mesh::{MeshError, MeshTransform, smooth_normals};
+pub use representative::MAX_REPRESENTATIVE_LIGHTS;
 pub use shape::{Aabb, Heightfield, Mesh, Shape, Wave, perpendicular_frame, quad_axes};
 pub use tessellate::{Tessellation, TriangleMesh};
 

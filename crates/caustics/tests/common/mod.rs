@@ -52,6 +52,7 @@ pub(crate) fn run_options(scene: &Path, out: &Path, method: &str, params: &[&str
         time: None,
         animate: None,
         reference_every: None,
+        representative_lights: 0,
     }
 }
 
