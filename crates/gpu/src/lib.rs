@@ -50,7 +50,7 @@ pub use gbuffer::{GBuffer, GBufferPass, ShadowMap};
 pub use impostor::{DistanceImpostor, ImpostorAtlas, ImpostorPass};
 pub use light_view::{LightFace, LightProjection, LightView};
 pub use profiling::{FrameMode, FrameSample, PassProfiler, PassSample, PassShape, PassStatistics};
-pub use renderer::{Renderer, RendererOptions};
+pub use renderer::{DIRECT_REPRESENTATIVE_LIGHTS, Renderer, RendererOptions};
 pub use scene_upload::GpuScene;
 pub use scoring::{ScoreAccumulator, ScoredImages, subpixel_offsets};
 pub use wgpu;

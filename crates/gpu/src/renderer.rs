@@ -41,6 +41,11 @@ struct DirectUniform {
     params: [f32; 4],
 }
 
+/// Lights each extended light (sphere, environment) becomes in the direct image
+/// ([`caustics_scene::Light::representative`]: point lights in the sphere, median-cut
+/// directional lights of the map); each costs a shadow map and a full-screen draw.
+pub const DIRECT_REPRESENTATIVE_LIGHTS: u32 = 16;
+
 /// Settings of the base renderer.
 #[derive(Clone, Copy, Debug)]
 pub struct RendererOptions {
@@ -128,9 +133,18 @@ impl DirectLighting {
             ..Default::default()
         });
         let bounds = scene.scene.bounds();
-        let lights = scene
+        // An extended light (only a method that renders it natively, pinhole, gets one:
+        // the harness gives the others representative lights) lights the direct image
+        // as its representative lights, as the methods' caustics would: soft shadows
+        // from a sphere light, the sky's light at all (the light buffer's black
+        // directional stand-in draws none).
+        let direct_lights: Vec<caustics_scene::Light> = scene
             .scene
             .lights
+            .iter()
+            .flat_map(|l| l.representative(DIRECT_REPRESENTATIVE_LIGHTS))
+            .collect();
+        let lights = direct_lights
             .iter()
             .map(|light| {
                 let res = match light {
@@ -366,7 +380,9 @@ impl Renderer {
         &self.camera_gbuffer
     }
 
-    /// The view and shadow map of light `i` (fitted to the whole scene). Methods that
+    /// The view and shadow map of direct light `i` (fitted to the whole scene): the
+    /// scene's lights in order, each extended light as its
+    /// [`DIRECT_REPRESENTATIVE_LIGHTS`] representative lights in its place. Methods that
     /// need a light G-buffer fit their own [`LightView`] and allocate one with
     /// [`GBufferPass::light_gbuffer`].
     pub fn light(&self, i: usize) -> Option<(&LightView, &ShadowMap)> {

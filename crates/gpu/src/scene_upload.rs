@@ -285,7 +285,8 @@ pub fn gpu_light(l: &Light) -> GpuLight {
         },
         // A sphere light is, from afar, a point light of intensity π r² L (pinhole
         // draws it as the disc of radius r it is); an environment a black directional
-        // light, so the base passes ignore it (pinhole reads its map from the scene).
+        // light (pinhole reads its map from the scene). The direct image does not use
+        // these stand-ins: it draws each extended light's representative lights.
         Light::Sphere {
             position,
             radius,
@@ -315,8 +316,8 @@ impl GpuScene {
     ) -> Result<Self, GpuError> {
         // A sphere light goes up as its far-field point light, an environment as a
         // black directional light (gpu_light): the methods that take them (pinhole)
-        // read their radius or map from the scene; the base passes draw no direct
-        // light from an environment.
+        // read their radius or map from the scene; the direct image draws their
+        // representative lights (`DIRECT_REPRESENTATIVE_LIGHTS`).
         let device = &ctx.device;
         let mut vertices: Vec<SceneVertex> = Vec::new();
         let mut indices: Vec<u32> = Vec::new();

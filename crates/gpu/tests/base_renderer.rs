@@ -6,7 +6,8 @@ use std::path::{Path, PathBuf};
 
 use caustics_gpu::readback::{read_rgba32f, read_texture_bytes};
 use caustics_gpu::{
-    AdapterChoice, FrameMode, GpuContext, GpuScene, PassProfiler, Renderer, RendererOptions,
+    AdapterChoice, DIRECT_REPRESENTATIVE_LIGHTS, FrameMode, GpuContext, GpuScene, PassProfiler,
+    Renderer, RendererOptions,
 };
 use caustics_scene::{Scene, Vec3, Vec4};
 
@@ -108,6 +109,57 @@ fn camera_gbuffer_and_direct_light_match_the_analytic_scene() {
         floor_lit > 10_000 && floor_shadow > 300 && glass > 1_000,
         "{floor_lit} {floor_shadow} {glass}"
     );
+}
+
+/// A diffuse floor under a constant sky of radiance L has radiance ρ·L. The direct
+/// image draws the sky as its `DIRECT_REPRESENTATIVE_LIGHTS` median-cut directional
+/// lights: exactly their sum (each shadow-mapped, none occluded), which is ρ·L within
+/// median cut's error for a uniform sky (8.7 % high at 16 lights, the scene crate's test).
+#[test]
+fn a_floor_under_a_constant_sky_is_lit_by_its_representative_lights() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let path = tmp.path().join("sky.json");
+    let (albedo, sky) = (0.5f32, Vec3::new(2.0, 1.0, 0.5));
+    std::fs::write(
+        &path,
+        serde_json::json!({
+            "name": "floor_under_sky",
+            "camera": {"eye": [0, 6, 0.01], "target": [0, 0, 0], "up": [0, 1, 0],
+                       "fov_y_deg": 40, "width": 32, "height": 24},
+            "lights": [{"type": "environment", "radiance": sky.to_array()}],
+            "materials": {"floor": {"type": "diffuse", "albedo": [albedo, albedo, albedo]}},
+            "objects": [{"shape": {"type": "quad", "center": [0, 0, 0], "normal": [0, 1, 0],
+                                   "size": [20, 20]}, "material": "floor"}]
+        })
+        .to_string(),
+    )
+    .expect("write");
+    let (ctx, renderer) = render(&path);
+    let direct = read_rgba32f(&ctx, &renderer.targets().direct.texture, "direct").expect("direct");
+    let lights = renderer.scene().scene.lights[0].representative(DIRECT_REPRESENTATIVE_LIGHTS);
+    assert_eq!(lights.len(), DIRECT_REPRESENTATIVE_LIGHTS as usize);
+    let expected: Vec3 = lights
+        .iter()
+        .map(|l| match l {
+            caustics_scene::Light::Directional {
+                direction,
+                irradiance,
+            } => *irradiance * (-direction.y).max(0.0) * albedo / std::f32::consts::PI,
+            other => panic!("expected directional lights, got {other:?}"),
+        })
+        .sum();
+    let analytic = sky * albedo;
+    assert!(
+        ((expected - analytic) / analytic).abs().max_element() < 0.1,
+        "{expected} vs ρ·L {analytic}"
+    );
+    for px in direct.chunks_exact(4) {
+        let rgb = Vec3::new(px[0], px[1], px[2]);
+        assert!(
+            ((rgb - expected) / expected).abs().max_element() < 2e-3,
+            "{rgb} vs {expected}"
+        );
+    }
 }
 
 #[test]

@@ -39,9 +39,9 @@ fn luminance(c: DVec3) -> f64 {
 impl Light {
     /// This light as at most `count` lights without extent (see the module docs): a
     /// sphere light as `count` point lights, an environment as up to `count`
-    /// directional lights (fewer where the map has fewer lit pixels). A light without
-    /// extent is returned as it is. `count` is clamped to
-    /// 1..=[`MAX_REPRESENTATIVE_LIGHTS`].
+    /// directional lights (fewer where the map has fewer lit pixels; a black map as one
+    /// black light from the zenith, so a scene keeps a light). A light without extent
+    /// is returned as it is. `count` is clamped to 1..=[`MAX_REPRESENTATIVE_LIGHTS`].
     pub fn representative(&self, count: u32) -> Vec<Light> {
         let count = count.clamp(1, MAX_REPRESENTATIVE_LIGHTS);
         match self {
@@ -244,7 +244,7 @@ fn median_cut(map: &EnvironmentMap, scale: Vec3, count: usize) -> Vec<Light> {
     let centre = |x: f64, y: f64| {
         EnvironmentMap::direction((x / f64::from(w)) as f32, (y / f64::from(h)) as f32).as_dvec3()
     };
-    regions
+    let lights: Vec<Light> = regions
         .iter()
         .filter(|r| r.energy > 0.0)
         .map(|r| {
@@ -272,7 +272,15 @@ fn median_cut(map: &EnvironmentMap, scale: Vec3, count: usize) -> Vec<Light> {
                 irradiance: irradiance.as_vec3(),
             }
         })
-        .collect()
+        .collect();
+    if lights.is_empty() {
+        // A black sky still becomes one (black) light, so a scene keeps at least one.
+        return vec![Light::Directional {
+            direction: Vec3::NEG_Y,
+            irradiance: Vec3::ZERO,
+        }];
+    }
+    lights
 }
 
 #[cfg(test)]
@@ -457,12 +465,18 @@ mod tests {
     }
 
     #[test]
-    fn a_black_map_gives_no_lights_and_point_lights_stay() {
+    fn a_black_map_gives_one_black_light_and_point_lights_stay() {
         let env = Light::Environment {
             map: Arc::new(EnvironmentMap::constant(Vec3::ZERO)),
             scale: Vec3::ONE,
         };
-        assert!(env.representative(16).is_empty());
+        assert_eq!(
+            env.representative(16),
+            vec![Light::Directional {
+                direction: Vec3::NEG_Y,
+                irradiance: Vec3::ZERO
+            }]
+        );
         let point = Light::Point {
             position: Vec3::ONE,
             intensity: Vec3::ONE,
