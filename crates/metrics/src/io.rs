@@ -189,13 +189,16 @@ pub fn read_png(path: &Path) -> Result<Rgb8Image, MetricsError> {
     })
 }
 
-/// Largest per-pixel count [`write_counts_png`] stores exactly (16-bit grey).
+/// Largest per-pixel count [`write_counts_png`] stores as one 16-bit grey sample; above
+/// it the file holds each count in two 16-bit samples.
 pub const MAX_PNG_COUNT: u32 = u16::MAX as u32;
 
-/// Writes per-pixel counts (row-major, row 0 at the top) as a 16-bit greyscale PNG:
-/// lossless and compressed, so figures drawn later from several runs (shared-scale
-/// heatmaps) read the exact counts back with [`read_counts_png`]. Counts above
-/// [`MAX_PNG_COUNT`] are refused, never clipped silently.
+/// Writes per-pixel counts (row-major, row 0 at the top) as a lossless, compressed PNG,
+/// so figures drawn later from several runs (shared-scale heatmaps) read the exact
+/// counts back with [`read_counts_png`]: 16-bit grey where every count is at most
+/// [`MAX_PNG_COUNT`], else 16-bit RGB holding each count's high half in red and its low
+/// half in green (a beam method under 16 lights stacks over 65,535 fragments on a
+/// pixel). Never clipped.
 pub fn write_counts_png(
     path: &Path,
     counts: &[u32],
@@ -204,22 +207,26 @@ pub fn write_counts_png(
 ) -> Result<(), MetricsError> {
     use image::ImageEncoder;
     check_buffer(counts.len(), width, height, "counts to write")?;
-    let mut bytes = Vec::with_capacity(counts.len() * 2);
-    for (i, &c) in counts.iter().enumerate() {
-        let v = u16::try_from(c).map_err(|_| MetricsError::InvalidParameter {
-            name: "counts",
-            message: format!(
-                "pixel ({}, {}) holds {c}, above the {MAX_PNG_COUNT} a 16-bit PNG stores",
-                i as u32 % width.max(1),
-                i as u32 / width.max(1)
-            ),
-        })?;
-        // `image` takes 16-bit samples in native byte order (it writes PNG's big-endian).
-        bytes.extend_from_slice(&v.to_ne_bytes());
+    let wide = counts.iter().any(|&c| c > MAX_PNG_COUNT);
+    let mut bytes = Vec::with_capacity(counts.len() * if wide { 6 } else { 2 });
+    // `image` takes 16-bit samples in native byte order (it writes PNG's big-endian).
+    for &c in counts {
+        if wide {
+            for half in [(c >> 16) as u16, c as u16, 0] {
+                bytes.extend_from_slice(&half.to_ne_bytes());
+            }
+        } else {
+            bytes.extend_from_slice(&(c as u16).to_ne_bytes());
+        }
     }
+    let color = if wide {
+        image::ExtendedColorType::Rgb16
+    } else {
+        image::ExtendedColorType::L16
+    };
     let mut buf = Vec::new();
     image::codecs::png::PngEncoder::new(&mut buf)
-        .write_image(&bytes, width, height, image::ExtendedColorType::L16)
+        .write_image(&bytes, width, height, color)
         .map_err(|e| MetricsError::Png {
             path: path.to_owned(),
             message: e.to_string(),
@@ -237,18 +244,24 @@ pub fn read_counts_png(path: &Path) -> Result<(Vec<u32>, u32, u32), MetricsError
                 message: e.to_string(),
             }
         })?;
-    let image::DynamicImage::ImageLuma16(grey) = decoded else {
-        return Err(MetricsError::Png {
-            path: path.to_owned(),
-            message: "expected a 16-bit greyscale PNG of counts".to_owned(),
-        });
+    let (width, height) = (decoded.width(), decoded.height());
+    let counts = match decoded {
+        image::DynamicImage::ImageLuma16(grey) => {
+            grey.into_raw().into_iter().map(u32::from).collect()
+        }
+        image::DynamicImage::ImageRgb16(rgb) => rgb
+            .into_raw()
+            .chunks_exact(3)
+            .map(|p| (u32::from(p[0]) << 16) | u32::from(p[1]))
+            .collect(),
+        _ => {
+            return Err(MetricsError::Png {
+                path: path.to_owned(),
+                message: "expected a 16-bit greyscale or 16-bit RGB PNG of counts".to_owned(),
+            });
+        }
     };
-    let (width, height) = grey.dimensions();
-    Ok((
-        grey.into_raw().into_iter().map(u32::from).collect(),
-        width,
-        height,
-    ))
+    Ok((counts, width, height))
 }
 
 fn check_buffer(len: usize, width: u32, height: u32, what: &str) -> Result<(), MetricsError> {
