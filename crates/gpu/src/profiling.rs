@@ -25,8 +25,15 @@ pub const STATISTICS: wgpu::PipelineStatisticsTypes =
         .union(wgpu::PipelineStatisticsTypes::FRAGMENT_SHADER_INVOCATIONS)
         .union(wgpu::PipelineStatisticsTypes::COMPUTE_SHADER_INVOCATIONS);
 
-const TS_BYTES_PER_FRAME: u64 = MAX_PASSES_PER_FRAME as u64 * 2 * 8;
-const STATS_BYTES_PER_FRAME: u64 = MAX_PASSES_PER_FRAME as u64 * STATS_PER_QUERY * 8;
+/// Passes per frame the results buffers are first sized for; a frame with more grows
+/// them (doubling, contents copied), so a 20,000-frame run of a one-light scene does
+/// not hold [`MAX_PASSES_PER_FRAME`] passes' room per frame.
+const INITIAL_PASSES_PER_FRAME: u64 = 64;
+/// Bytes of a timestamp pair and of one statistics query.
+const TS_BYTES_PER_PASS: u64 = 2 * 8;
+const STATS_BYTES_PER_PASS: u64 = STATS_PER_QUERY * 8;
+/// `resolve_query_set` writes at multiples of this offset.
+const RESOLVE_ALIGNMENT: u64 = wgpu::QUERY_RESOLVE_BUFFER_ALIGNMENT;
 
 /// What a frame measures (DESIGN "Measuring honestly": time with counting off,
 /// count with it on, in separate frames).
@@ -108,14 +115,69 @@ struct FrameRecord {
     mode: FrameMode,
     passes: Vec<(String, PassShape)>,
     wall_ms: f64,
+    /// Where its queries were resolved in the results buffer of its mode (bytes).
+    results_offset: u64,
+}
+
+/// A results buffer that frames resolve into one after another, each at the next
+/// aligned offset; it grows when a frame does not fit.
+struct Results {
+    label: &'static str,
+    buffer: wgpu::Buffer,
+    /// Bytes written so far (aligned).
+    used: u64,
+}
+
+impl Results {
+    fn new(device: &wgpu::Device, label: &'static str, size: u64) -> Self {
+        Self {
+            label,
+            buffer: Self::buffer(device, label, size),
+            used: 0,
+        }
+    }
+
+    fn buffer(device: &wgpu::Device, label: &'static str, size: u64) -> wgpu::Buffer {
+        device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(label),
+            size: size
+                .max(RESOLVE_ALIGNMENT)
+                .next_multiple_of(RESOLVE_ALIGNMENT),
+            usage: wgpu::BufferUsages::QUERY_RESOLVE
+                | wgpu::BufferUsages::COPY_SRC
+                | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        })
+    }
+
+    /// Room for `bytes` more: the offset to resolve at. Grows the buffer (at least
+    /// doubling, the results so far copied in `encoder`) when they do not fit.
+    fn reserve(
+        &mut self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        bytes: u64,
+    ) -> u64 {
+        let offset = self.used;
+        let needed = offset + bytes;
+        if needed > self.buffer.size() {
+            let grown = Self::buffer(device, self.label, needed.max(2 * self.buffer.size()));
+            if offset > 0 {
+                encoder.copy_buffer_to_buffer(&self.buffer, 0, &grown, 0, offset);
+            }
+            self.buffer = grown;
+        }
+        self.used = needed.next_multiple_of(RESOLVE_ALIGNMENT);
+        offset
+    }
 }
 
 /// Query sets and result buffers for up to `max_frames` frames.
 pub struct PassProfiler {
     timestamps: Option<wgpu::QuerySet>,
     statistics: Option<wgpu::QuerySet>,
-    ts_results: Option<wgpu::Buffer>,
-    stats_results: Option<wgpu::Buffer>,
+    ts_results: Option<Results>,
+    stats_results: Option<Results>,
     period_ns: f64,
     max_frames: u32,
     frames: Vec<FrameRecord>,
@@ -140,20 +202,17 @@ impl PassProfiler {
                 count: MAX_PASSES_PER_FRAME,
             })
         });
-        let results = |label: &str, per_frame: u64| {
-            device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size: per_frame * max_frames.max(1) as u64,
-                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
-                mapped_at_creation: false,
-            })
+        let results = |label: &'static str, per_pass: u64| {
+            let per_frame =
+                (INITIAL_PASSES_PER_FRAME * per_pass).next_multiple_of(RESOLVE_ALIGNMENT);
+            Results::new(device, label, per_frame * u64::from(max_frames.max(1)))
         };
         let ts_results = timestamps
             .as_ref()
-            .map(|_| results("timestamp results", TS_BYTES_PER_FRAME));
+            .map(|_| results("timestamp results", TS_BYTES_PER_PASS));
         let stats_results = statistics
             .as_ref()
-            .map(|_| results("statistics results", STATS_BYTES_PER_FRAME));
+            .map(|_| results("statistics results", STATS_BYTES_PER_PASS));
         Self {
             timestamps,
             statistics,
@@ -198,6 +257,7 @@ impl PassProfiler {
             mode,
             passes: Vec::new(),
             wall_ms: 0.0,
+            results_offset: 0,
         });
         Ok(())
     }
@@ -240,7 +300,6 @@ impl PassProfiler {
             return;
         };
         rec.wall_ms = wall_ms;
-        let frame = self.frames.len() as u64;
         let n = rec.passes.len() as u32;
         let mut encoder = ctx
             .device
@@ -248,15 +307,24 @@ impl PassProfiler {
                 label: Some("resolve queries"),
             });
         if n > 0 {
-            if let (Some(set), Some(buf), FrameMode::Timed) =
-                (&self.timestamps, &self.ts_results, rec.mode)
+            if let (Some(set), Some(results), FrameMode::Timed) =
+                (&self.timestamps, &mut self.ts_results, rec.mode)
             {
-                encoder.resolve_query_set(set, 0..2 * n, buf, frame * TS_BYTES_PER_FRAME);
+                let offset =
+                    results.reserve(&ctx.device, &mut encoder, u64::from(n) * TS_BYTES_PER_PASS);
+                encoder.resolve_query_set(set, 0..2 * n, &results.buffer, offset);
+                rec.results_offset = offset;
             }
-            if let (Some(set), Some(buf), FrameMode::Count) =
-                (&self.statistics, &self.stats_results, rec.mode)
+            if let (Some(set), Some(results), FrameMode::Count) =
+                (&self.statistics, &mut self.stats_results, rec.mode)
             {
-                encoder.resolve_query_set(set, 0..n, buf, frame * STATS_BYTES_PER_FRAME);
+                let offset = results.reserve(
+                    &ctx.device,
+                    &mut encoder,
+                    u64::from(n) * STATS_BYTES_PER_PASS,
+                );
+                encoder.resolve_query_set(set, 0..n, &results.buffer, offset);
+                rec.results_offset = offset;
             }
         }
         ctx.queue.submit([encoder.finish()]);
@@ -266,29 +334,19 @@ impl PassProfiler {
     /// Reads all results back (once, after the measured frames) and clears the profiler.
     pub fn collect(&mut self, ctx: &GpuContext) -> Result<Vec<FrameSample>, GpuError> {
         let frames = std::mem::take(&mut self.frames);
-        let used = frames.len() as u64;
-        let ts = match &self.ts_results {
-            Some(b) if used > 0 => Some(crate::readback::read_buffer_u64(
-                ctx,
-                b,
-                used * TS_BYTES_PER_FRAME,
-                "timestamps",
-            )?),
-            _ => None,
+        let read = |results: &mut Option<Results>, what: &str| match results {
+            Some(r) if r.used > 0 => {
+                let values = crate::readback::read_buffer_u64(ctx, &r.buffer, r.used, what);
+                r.used = 0;
+                values.map(Some)
+            }
+            _ => Ok(None),
         };
-        let st = match &self.stats_results {
-            Some(b) if used > 0 => Some(crate::readback::read_buffer_u64(
-                ctx,
-                b,
-                used * STATS_BYTES_PER_FRAME,
-                "pipeline statistics",
-            )?),
-            _ => None,
-        };
-        let ts_per_frame = (TS_BYTES_PER_FRAME / 8) as usize;
-        let st_per_frame = (STATS_BYTES_PER_FRAME / 8) as usize;
+        let ts = read(&mut self.ts_results, "timestamps")?;
+        let st = read(&mut self.stats_results, "pipeline statistics")?;
         let mut out = Vec::with_capacity(frames.len());
-        for (f, rec) in frames.into_iter().enumerate() {
+        for rec in frames {
+            let first = (rec.results_offset / 8) as usize;
             let mut rejected = 0;
             let passes = rec
                 .passes
@@ -303,8 +361,8 @@ impl PassProfiler {
                         statistics: None,
                     };
                     if let (Some(ts), FrameMode::Timed) = (&ts, rec.mode) {
-                        let begin = ts[f * ts_per_frame + 2 * p];
-                        let end = ts[f * ts_per_frame + 2 * p + 1];
+                        let begin = ts[first + 2 * p];
+                        let end = ts[first + 2 * p + 1];
                         // Zero means "never written"; end < begin happens on some drivers
                         // across power-state changes. Both are rejected, never reported as 0.
                         // end == begin is a pass shorter than one tick, and is kept.
@@ -316,7 +374,7 @@ impl PassProfiler {
                         }
                     }
                     if let (Some(st), FrameMode::Count) = (&st, rec.mode) {
-                        let b = f * st_per_frame + p * STATS_PER_QUERY as usize;
+                        let b = first + p * STATS_PER_QUERY as usize;
                         sample.statistics = Some(PassStatistics {
                             vertex_invocations: st[b],
                             clipper_invocations: st[b + 1],

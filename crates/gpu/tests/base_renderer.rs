@@ -162,6 +162,75 @@ fn a_floor_under_a_constant_sky_is_lit_by_its_representative_lights() {
     }
 }
 
+/// Two skies make 2 × 16 representative lights: 66 base passes a frame, past the 64 the
+/// profiler's results buffers are first sized for. They grow (contents copied), and
+/// every pass of every frame still reads back its own timestamps and statistics.
+#[test]
+fn the_profiler_grows_past_64_passes_a_frame_and_keeps_every_frames_results() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let path = tmp.path().join("two_skies.json");
+    std::fs::write(
+        &path,
+        serde_json::json!({
+            "name": "two_skies",
+            "camera": {"eye": [0, 6, 0.01], "target": [0, 0, 0], "up": [0, 1, 0],
+                       "fov_y_deg": 40, "width": 32, "height": 24},
+            "lights": [{"type": "environment", "radiance": [1, 1, 1]},
+                       {"type": "environment", "radiance": [0.5, 0.25, 0.125]}],
+            "materials": {"floor": {"type": "diffuse", "albedo": [0.5, 0.5, 0.5]}},
+            "objects": [{"shape": {"type": "quad", "center": [0, 0, 0], "normal": [0, 1, 0],
+                                   "size": [20, 20]}, "material": "floor"}]
+        })
+        .to_string(),
+    )
+    .expect("write");
+    let scene = Scene::load(&path).expect("scene");
+    let ctx =
+        GpuContext::new(&AdapterChoice::from_flag_or_env(None)).unwrap_or_else(|e| panic!("{e}"));
+    let gpu_scene = GpuScene::upload(&ctx, scene.into(), Default::default()).expect("upload");
+    let renderer = Renderer::new(&ctx, gpu_scene, RendererOptions::default()).expect("renderer");
+    let modes = [
+        FrameMode::Timed,
+        FrameMode::Timed,
+        FrameMode::Count,
+        FrameMode::Timed,
+    ];
+    let mut profiler = PassProfiler::new(&ctx, modes.len() as u32);
+    for mode in modes {
+        let frame = renderer.begin_frame(&mut profiler, mode).expect("frame");
+        frame.submit(&ctx).expect("submit");
+    }
+    let frames = profiler.collect(&ctx).expect("collect");
+    assert_eq!(frames.len(), modes.len());
+    let lights = 2 * DIRECT_REPRESENTATIVE_LIGHTS as usize;
+    for (f, (frame, mode)) in frames.iter().zip(modes).enumerate() {
+        // clear, camera G-buffer, a shadow map and a direct draw per light.
+        assert_eq!(frame.passes.len(), 2 + 2 * lights, "frame {f}");
+        assert!(frame.passes.len() > 64);
+        assert_eq!(frame.rejected_timestamps, 0, "frame {f}");
+        for pass in &frame.passes {
+            match mode {
+                FrameMode::Timed => {
+                    assert!(pass.gpu_ms.is_some(), "frame {f} {}: no time", pass.name);
+                    assert!(pass.statistics.is_none());
+                }
+                _ => {
+                    let stats = pass.statistics.as_ref().expect("statistics");
+                    if pass.name == "base/direct" {
+                        // One full-screen draw: every pixel shaded, plus the 2×2 quads'
+                        // helpers along the triangle's edge (lavapipe: 960 of 768).
+                        let fragments = stats.fragment_invocations;
+                        assert!(
+                            (768..=2 * 768).contains(&fragments),
+                            "frame {f}: {fragments}"
+                        );
+                    }
+                }
+            }
+        }
+    }
+}
+
 #[test]
 fn point_light_cube_gbuffer_sees_the_first_surface_along_each_texel_ray() {
     let tmp = tempfile::tempdir().expect("tempdir");
