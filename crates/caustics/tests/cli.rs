@@ -2,18 +2,10 @@
 //! nothing already written is touched.
 
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Command;
 
-fn caustics(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_caustics"))
-        .args(args)
-        .output()
-        .expect("run caustics")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
+mod common;
+use common::{caustics, stderr};
 
 /// An output folder holding an earlier `result.json` for `<scene>/<method>`.
 fn earlier_result(out: &Path, scene: &str, method: &str) -> std::path::PathBuf {

@@ -2,18 +2,10 @@
 //! lands in the cache, and `caustics run` then scores against it on its own.
 
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Command;
 
-fn caustics(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_caustics"))
-        .args(args)
-        .output()
-        .expect("run caustics")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
+mod common;
+use common::{caustics, stderr};
 
 fn small_scene(dir: &Path, name: &str, width: u32, height: u32) -> String {
     let src = caustics_scene::resolve(name).expect("built-in");

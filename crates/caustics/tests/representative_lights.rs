@@ -3,18 +3,9 @@
 //! inside its ball, scored against the reference of the true sphere light.
 
 use std::path::Path;
-use std::process::{Command, Output};
 
-fn caustics(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_caustics"))
-        .args(args)
-        .output()
-        .expect("run caustics")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
+mod common;
+use common::{caustics, stderr};
 
 /// scenes/extended/ball_under_sphere_light.json at 48×36, written into `dir`.
 fn small_sphere_light_scene(dir: &Path) -> String {
@@ -23,9 +14,9 @@ fn small_sphere_light_scene(dir: &Path) -> String {
         serde_json::from_str(&std::fs::read_to_string(src).expect("read")).expect("json");
     json["camera"]["width"] = 48.into();
     json["camera"]["height"] = 36.into();
-    let path = dir.join("ball_under_sphere_light.json");
-    std::fs::write(&path, json.to_string()).expect("write");
-    path.display().to_string()
+    common::write_scene(dir, "ball_under_sphere_light", &json)
+        .display()
+        .to_string()
 }
 
 #[test]

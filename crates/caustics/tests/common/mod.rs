@@ -1,13 +1,27 @@
-//! Helpers of the harness's GPU test files: a small copy of a built-in scene and the
-//! cheapest `caustics run` of it. (The methods' accuracy tests live in their own crates
+//! Helpers of the harness's test files: the `caustics` binary run with arguments, a
+//! small copy of a built-in scene and the cheapest `caustics run` of it. (The methods' accuracy tests live in their own crates
 //! and use `caustics-testing` instead.) A file that uses a subset is its own crate,
 //! hence the `dead_code` allowance.
 #![allow(dead_code)]
 
 use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
 
 use caustics::result::RunResult;
 use caustics::run::{RunOptions, RunOutcome, run};
+
+/// Runs the `caustics` binary with `args` and waits for it.
+pub(crate) fn caustics(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_caustics"))
+        .args(args)
+        .output()
+        .expect("run caustics")
+}
+
+/// Its standard error, as text.
+pub(crate) fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
 
 /// Writes `json` as `<dir>/<name>.json`.
 pub(crate) fn write_scene(dir: &Path, name: &str, json: &serde_json::Value) -> PathBuf {
