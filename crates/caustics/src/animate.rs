@@ -2,10 +2,15 @@
 //!
 //! Every frame is a new instant: the scene is posed ([`Scene::at_time`]), uploaded and
 //! the method created anew, so no method reuses anything of the previous frame (what a
-//! method costs when nothing can be cached). The rebuild (upload, the method's setup,
-//! pipelines included) is timed on the CPU apart from the frame. Each instant gets one
-//! untimed count frame (the counters are read after it), then one timed frame, so the
-//! GPU time is the frame's own and not the first use of new pipelines.
+//! method costs when nothing can be cached). The rebuild (upload, the method's setup:
+//! its buffers, bind groups and whatever it derives from the scene) is timed on the CPU
+//! apart from the frame. Pipelines are not part of it after the first instant: like a
+//! real-time renderer, the device compiles each pipeline once
+//! ([`caustics_gpu::pipeline_cache`]), and each frame records how many its rebuild
+//! compiled (`pipelines_compiled`: the first instant's, then 0 unless a scene change
+//! asks for another variant). Each instant gets one untimed count frame (the counters
+//! are read after it), then one timed frame, so the GPU time is the frame's own and not
+//! the first use of new pipelines.
 //!
 //! Every `--reference-every`-th instant is scored like a still run (pixel-averaged
 //! scoring frame against a reference posed at that instant, from the cache or rendered
@@ -137,7 +142,8 @@ pub struct AnimationResult {
     pub frames: Vec<AnimationFrame>,
     /// Per-pass GPU times over the sequence's timed frames (one per instant).
     pub timing: Timing,
-    /// CPU wall time (ms) of each instant's rebuild (pose, upload, the method's setup).
+    /// CPU wall time (ms) of each instant's rebuild (upload, the method's setup;
+    /// pipelines only where compiled, see [`AnimationFrame::pipelines_compiled`]).
     pub rebuild_ms: Option<Summary>,
     /// The temporal error of each scored pair of consecutive instants.
     pub temporal: Vec<TemporalPair>,
@@ -165,6 +171,10 @@ pub struct AnimationFrame {
     pub frame_gpu_ms: Option<f64>,
     /// CPU wall time of this instant's rebuild (ms).
     pub rebuild_ms: f64,
+    /// Pipelines the rebuild compiled (the others were compiled at an earlier instant
+    /// and reused; files before this field read 0).
+    #[serde(default)]
+    pub pipelines_compiled: u64,
     /// The method's counters at this instant (of its untimed count frame).
     pub counters: std::collections::BTreeMap<String, u64>,
     /// Surface-caustic errors of the pixel-averaged scoring frame against the reference
@@ -275,6 +285,7 @@ pub fn run_animated(o: &RunOptions, spec: &AnimateSpec, scene: Scene) -> Result<
             None
         };
         let rebuild_started = std::time::Instant::now();
+        let pipelines_before = ctx.pipeline_stats();
         // Part of the rebuild: a moving sphere light moves its representative lights.
         let (method_scene, _) =
             crate::run::scene_for_method(&info, &posed_scene, o.representative_lights);
@@ -282,6 +293,7 @@ pub fn run_animated(o: &RunOptions, spec: &AnimateSpec, scene: Scene) -> Result<
         let renderer = Renderer::new(&ctx, gpu_scene, RendererOptions::default())?;
         let mut method = (info.create)(&ctx, &renderer, &parsed)?;
         let rebuild_ms = rebuild_started.elapsed().as_secs_f64() * 1e3;
+        let pipelines_compiled = ctx.pipeline_stats().since(pipelines_before).compiled;
         // The untimed frame is a count frame: it takes the first use of the new
         // pipelines, and the counters are read after it (some methods count only in
         // count frames, e.g. pinhole's gather); then the timed frame.
@@ -310,6 +322,7 @@ pub fn run_animated(o: &RunOptions, spec: &AnimateSpec, scene: Scene) -> Result<
             method_gpu_ms: one.method_gpu_ms.map(|s| s.median),
             frame_gpu_ms: one.frame_gpu_ms.map(|s| s.median),
             rebuild_ms,
+            pipelines_compiled,
             counters,
             errors: None,
             reference: None,
@@ -453,7 +466,7 @@ pub fn markdown(r: &AnimationResult) -> String {
     );
     let _ = writeln!(
         s,
-        "{} ({}), {} build {}{}. Every frame is a new instant: the scene posed, uploaded and the method created anew (its rebuild timed on the CPU), one untimed frame, then the timed one. Scored every {} frames and the frame after (scoring grid {}×{}).\n",
+        "{} ({}), {} build {}{}. Every frame is a new instant: the scene posed, uploaded and the method created anew (its rebuild timed on the CPU; pipelines compiled once, at the first instant that needs them), one untimed frame, then the timed one. Scored every {} frames and the frame after (scoring grid {}×{}).\n",
         r.machine.adapter,
         r.machine.backend,
         r.build.profile,
@@ -497,18 +510,19 @@ pub fn markdown(r: &AnimationResult) -> String {
     }
     let _ = writeln!(
         s,
-        "## Frames\n\n| # | t s | method GPU ms | frame GPU ms | rebuild ms | flux | relMSE | HDR-FLIP |\n|---|---|---|---|---|---|---|---|"
+        "## Frames\n\n| # | t s | method GPU ms | frame GPU ms | rebuild ms | pipelines compiled | flux | relMSE | HDR-FLIP |\n|---|---|---|---|---|---|---|---|---|"
     );
     for f in &r.frames {
         let e = f.errors.as_ref();
         let _ = writeln!(
             s,
-            "| {} | {:.4} | {} | {} | {:.1} | {} | {} | {} |",
+            "| {} | {:.4} | {} | {} | {:.1} | {} | {} | {} | {} |",
             f.index,
             f.time_s,
             opt(f.method_gpu_ms, 3),
             opt(f.frame_gpu_ms, 3),
             f.rebuild_ms,
+            f.pipelines_compiled,
             opt(e.and_then(|e| e.flux_ratio), 3),
             e.map_or("–".into(), |e| format!("{:.3e}", e.rel_mse)),
             opt(e.and_then(|e| e.hdr_flip), 3),
@@ -565,7 +579,7 @@ pub fn side_by_side(all: &[AnimationResult]) -> String {
     let mean = |v: Vec<f64>| (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64);
     let _ = writeln!(
         s,
-        "# Animated sequences side by side\n\nEvery frame a new instant (scene posed, uploaded, method created anew; its rebuild on the CPU apart); GPU times are medians (p10–p90) of the timed frames, one per instant. Errors: means over the scored instants (pixel-averaged scoring frames against references at those instants). Temporal relRMSE: the method's frame-to-frame change against the reference's, RMS over the scored pairs, beside the same frames' still relRMSE; change ratio: Σ Δm² / Σ Δr² (1 = the method's image changes as much as the caustic's).\n"
+        "# Animated sequences side by side\n\nEvery frame a new instant (scene posed, uploaded, method created anew; its rebuild on the CPU apart, pipelines compiled once per sequence); GPU times are medians (p10–p90) of the timed frames, one per instant. Errors: means over the scored instants (pixel-averaged scoring frames against references at those instants). Temporal relRMSE: the method's frame-to-frame change against the reference's, RMS over the scored pairs, beside the same frames' still relRMSE; change ratio: Σ Δm² / Σ Δr² (1 = the method's image changes as much as the caustic's).\n"
     );
     let _ = writeln!(
         s,

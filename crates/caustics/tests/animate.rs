@@ -46,6 +46,15 @@ fn a_water_sequence_is_new_at_every_instant_and_a_still_run_repeats_an_instant()
             f.index
         );
         assert!(f.rebuild_ms > 0.0);
+        // Pipelines are compiled by the first instant's rebuild only; the later ones
+        // create the method anew on pipelines already compiled.
+        assert_eq!(
+            f.pipelines_compiled > 0,
+            f.index == 0,
+            "frame {}: {} pipelines compiled",
+            f.index,
+            f.pipelines_compiled
+        );
         // Frames 0 and 2 are every 2nd; frame 1 is frame 0's partner.
         let e = f
             .errors

@@ -269,7 +269,7 @@ impl<'c> FillProbes<'c> {
             },
         );
         let module = ctx.checked("ceilings fill.wgsl", || {
-            caustics_gpu::shader::module(&ctx.device, "ceilings fill.wgsl", FILL_WGSL.to_owned())
+            caustics_gpu::shader::module(&ctx.device, "ceilings fill.wgsl", FILL_WGSL)
         })?;
         Ok(Self {
             width,
@@ -564,11 +564,7 @@ impl<'c> ComputeProbes<'c> {
             },
         );
         let module = ctx.checked("ceilings compute.wgsl", || {
-            caustics_gpu::shader::module(
-                &ctx.device,
-                "ceilings compute.wgsl",
-                COMPUTE_WGSL.to_owned(),
-            )
+            caustics_gpu::shader::module(&ctx.device, "ceilings compute.wgsl", COMPUTE_WGSL)
         })?;
         Ok(Self {
             ctx,

@@ -63,6 +63,8 @@ pub struct GpuContext {
     /// Device loss and errors raised outside any error scope, recorded by the device's
     /// callbacks instead of wgpu's default (a panic), reported by [`GpuContext::check_device`].
     faults: Arc<Mutex<DeviceFaults>>,
+    /// Shader modules and pipelines compiled on this device, reused by identical builds.
+    pipelines: crate::pipeline_cache::PipelineCache,
 }
 
 /// What the device's callbacks saw.
@@ -238,6 +240,7 @@ impl GpuContext {
             limits,
             memory: crate::limits::GpuMemory::new(memory_budget),
             faults,
+            pipelines: Default::default(),
         })
     }
 
@@ -280,6 +283,16 @@ impl GpuContext {
             });
         }
         Ok(())
+    }
+
+    /// How many pipelines this device compiled and how many pass builds reused one
+    /// ([`crate::pipeline_cache`]).
+    pub fn pipeline_stats(&self) -> crate::pipeline_cache::PipelineStats {
+        self.pipelines.stats()
+    }
+
+    pub(crate) fn pipelines(&self) -> &crate::pipeline_cache::PipelineCache {
+        &self.pipelines
     }
 
     /// Whether per-pass timestamps can be taken.

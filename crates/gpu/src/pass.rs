@@ -42,9 +42,12 @@
 //! ```
 
 use std::collections::BTreeMap;
+use std::fmt::Write as _;
 use std::ops::{Deref, DerefMut};
+use std::sync::Arc;
 
 use crate::frame::{Frame, ProfiledComputePass, ProfiledRenderPass};
+use crate::pipeline_cache::PipelineKey;
 use crate::renderer::{Renderer, fill_constants};
 use crate::{GpuContext, GpuError, shader};
 
@@ -279,18 +282,26 @@ fn storage_format(f: naga::StorageFormat) -> Option<wgpu::TextureFormat> {
 /// A shader module with its reflection.
 pub struct Shader {
     label: String,
+    /// The composed WGSL (what identifies the module and, with a descriptor, a cached
+    /// pipeline: [`crate::pipeline_cache`]).
+    source: Arc<str>,
     module: wgpu::ShaderModule,
-    reflection: Reflection,
+    reflection: Arc<Reflection>,
 }
 
 impl Shader {
-    /// Validates `source` with naga, reflects it and creates the module. A shader that
-    /// does not validate is [`GpuError::Shader`] with naga's report.
+    /// Validates `source` with naga, reflects it and creates the module (once per
+    /// device and source: a second shader of the same source shares the first's). A
+    /// shader that does not validate is [`GpuError::Shader`] with naga's report.
     pub fn new(ctx: &GpuContext, label: &str, source: String) -> Result<Self, GpuError> {
-        let reflection = Reflection::of(label, &source).map_err(GpuError::Shader)?;
-        let module = shader::module(&ctx.device, label, source);
+        let source: Arc<str> = source.into();
+        let (module, reflection) = ctx.pipelines().module(&source, || {
+            let reflection = Reflection::of(label, &source).map_err(GpuError::Shader)?;
+            Ok::<_, GpuError>((shader::module(&ctx.device, label, &source), reflection))
+        })?;
         Ok(Self {
             label: label.to_owned(),
+            source,
             module,
             reflection,
         })
@@ -521,6 +532,25 @@ fn group_layouts<'l>(
 }
 
 impl BuiltGroups<'_> {
+    /// The bind-group layouts' entries (those of `keep`, or all), which with the source
+    /// and the rest of a descriptor identify a cached pipeline.
+    fn layout_key(&self, keep: Option<&[u32]>) -> String {
+        let mut key = String::new();
+        for g in 0..self.groups {
+            let schema = match (g, self.frame) {
+                _ if keep.is_some_and(|k| !k.contains(&g)) => None,
+                (0, Some(r)) => Some(r.frame_schema()),
+                _ => self.schemas.get(&g),
+            };
+            let _ = write!(key, "[{g}:");
+            for b in schema.map_or(&[][..], |s| &s.bindings) {
+                let _ = write!(key, "({},{:?},{:?})", b.binding, b.visibility, b.ty);
+            }
+            key.push(']');
+        }
+        key
+    }
+
     /// A pipeline layout of only the groups in `keep` (the others are holes): for a
     /// kernel that must not see a group the pass's other kernels use.
     fn pipeline_layout_of(
@@ -797,37 +827,56 @@ impl<'a> ComputePassBuilder<'a> {
             }
         }
         let groups = self.groups;
-        self.ctx.checked(&format!("pass {name}"), || {
+        let cache = self.ctx.pipelines();
+        let (pass, compiled) = self.ctx.checked(&format!("pass {name}"), || {
             let built = groups.build(&name)?;
+            let mut compiled = Vec::new();
             let kernels = kernels
                 .iter()
                 .map(|entry| {
                     let subset = kernel_groups
                         .iter()
                         .find(|(k, _)| k == entry)
-                        .map(|(_, g)| built.pipeline_layout_of(device, &name, g));
-                    let pipeline =
-                        device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                            label: Some(&format!("{name}:{entry}")),
-                            layout: Some(subset.as_ref().unwrap_or(&built.pipeline_layout)),
-                            module: &shader.module,
-                            entry_point: Some(entry),
-                            compilation_options: wgpu::PipelineCompilationOptions {
-                                constants: &constants,
-                                ..Default::default()
-                            },
-                            cache: None,
-                        });
+                        .map(|(_, g)| g.as_slice());
+                    let key = PipelineKey {
+                        source: shader.source.clone(),
+                        descriptor: format!(
+                            "compute {entry} {constants:?} {}",
+                            built.layout_key(subset)
+                        ),
+                    };
+                    let pipeline = cache.compute(&key).unwrap_or_else(|| {
+                        let layout = subset.map(|g| built.pipeline_layout_of(device, &name, g));
+                        let pipeline =
+                            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                                label: Some(&format!("{name}:{entry}")),
+                                layout: Some(layout.as_ref().unwrap_or(&built.pipeline_layout)),
+                                module: &shader.module,
+                                entry_point: Some(entry),
+                                compilation_options: wgpu::PipelineCompilationOptions {
+                                    constants: &constants,
+                                    ..Default::default()
+                                },
+                                cache: None,
+                            });
+                        compiled.push((key, pipeline.clone()));
+                        pipeline
+                    });
                     ((*entry).to_owned(), pipeline)
                 })
                 .collect();
-            Ok(ComputePass {
-                name: name.clone(),
-                sources: built.sources,
-                schemas: built.schemas,
-                kernels,
-            })
-        })?
+            Ok::<_, GpuError>((
+                ComputePass {
+                    name: name.clone(),
+                    sources: built.sources,
+                    schemas: built.schemas,
+                    kernels,
+                },
+                compiled,
+            ))
+        })??;
+        cache.keep_compute(compiled);
+        Ok(pass)
     }
 }
 
@@ -1079,10 +1128,22 @@ impl<'a> RasterPassBuilder<'a> {
             .flatten()
             .next()
             .is_some_and(|t| t.blend.is_some());
-        self.ctx.checked(&format!("pass {name}"), || {
+        let cache = self.ctx.pipelines();
+        let (pass, compiled) = self.ctx.checked(&format!("pass {name}"), || {
             let built = groups.build(&name)?;
-            let pipeline = |constants: &[(&str, f64)]| {
-                device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            let mut compiled = Vec::new();
+            let mut pipeline = |constants: &[(&str, f64)]| {
+                let key = PipelineKey {
+                    source: shader.source.clone(),
+                    descriptor: format!(
+                        "render {vertex} {vertex_buffers:?} {fragment:?} {targets:?} {primitive:?} {depth_stencil:?} {constants:?} {}",
+                        built.layout_key(None)
+                    ),
+                };
+                if let Some(pipeline) = cache.render(&key) {
+                    return pipeline;
+                }
+                let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                     label: Some(&name),
                     layout: Some(&built.pipeline_layout),
                     vertex: wgpu::VertexState {
@@ -1105,7 +1166,9 @@ impl<'a> RasterPassBuilder<'a> {
                     }),
                     multiview_mask: None,
                     cache: None,
-                })
+                });
+                compiled.push((key, pipeline.clone()));
+                pipeline
             };
             let (timed, counting) = if counted {
                 (
@@ -1115,15 +1178,20 @@ impl<'a> RasterPassBuilder<'a> {
             } else {
                 (pipeline(&[]), None)
             };
-            Ok(RasterPass {
-                name: name.clone(),
-                sources: built.sources,
-                schemas: built.schemas,
-                timed,
-                counting,
-                blended,
-            })
-        })?
+            Ok::<_, GpuError>((
+                RasterPass {
+                    name: name.clone(),
+                    sources: built.sources,
+                    schemas: built.schemas,
+                    timed,
+                    counting,
+                    blended,
+                },
+                compiled,
+            ))
+        })??;
+        cache.keep_render(compiled);
+        Ok(pass)
     }
 }
 

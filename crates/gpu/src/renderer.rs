@@ -435,6 +435,11 @@ impl Renderer {
         );
     }
 
+    /// Group 0's schema (its bindings identify cached pipelines).
+    pub(crate) fn frame_schema(&self) -> &BindGroupSchema {
+        &self.frame_schema
+    }
+
     /// Layout of group 0 (frame.wgsl), for method pipeline layouts.
     pub fn frame_layout(&self) -> &wgpu::BindGroupLayout {
         self.frame_schema.layout()

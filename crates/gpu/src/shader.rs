@@ -30,10 +30,10 @@ pub fn compose_method(own: &str) -> String {
 }
 
 /// Creates a shader module from composed WGSL.
-pub fn module(device: &wgpu::Device, label: &str, source: String) -> wgpu::ShaderModule {
+pub fn module(device: &wgpu::Device, label: &str, source: &str) -> wgpu::ShaderModule {
     device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some(label),
-        source: wgpu::ShaderSource::Wgsl(Cow::Owned(source)),
+        source: wgpu::ShaderSource::Wgsl(Cow::Borrowed(source)),
     })
 }
 
