@@ -88,25 +88,32 @@ impl PipelineCache {
 
     /// The cached render pipeline of `key`, if any (counted as reused).
     pub(crate) fn render(&self, key: &PipelineKey) -> Option<wgpu::RenderPipeline> {
-        let found = self
-            .render
-            .lock()
-            .unwrap_or_else(PoisonError::into_inner)
-            .get(key)
-            .cloned();
-        self.count(found.is_some());
-        found
+        self.find(&self.render, key)
     }
 
     /// The cached compute pipeline of `key`, if any (counted as reused).
     pub(crate) fn compute(&self, key: &PipelineKey) -> Option<wgpu::ComputePipeline> {
-        let found = self
-            .compute
+        self.find(&self.compute, key)
+    }
+
+    /// `key`'s pipeline in `pipelines`, counted as reused if there, else as compiled
+    /// (the caller compiles it).
+    fn find<P: Clone>(
+        &self,
+        pipelines: &Mutex<HashMap<PipelineKey, P>>,
+        key: &PipelineKey,
+    ) -> Option<P> {
+        let found = pipelines
             .lock()
             .unwrap_or_else(PoisonError::into_inner)
             .get(key)
             .cloned();
-        self.count(found.is_some());
+        let counter = if found.is_some() {
+            &self.reused
+        } else {
+            &self.compiled
+        };
+        counter.fetch_add(1, Ordering::Relaxed);
         found
     }
 
@@ -125,10 +132,5 @@ impl PipelineCache {
             .lock()
             .unwrap_or_else(PoisonError::into_inner)
             .extend(compiled);
-    }
-
-    fn count(&self, hit: bool) {
-        let counter = if hit { &self.reused } else { &self.compiled };
-        counter.fetch_add(1, Ordering::Relaxed);
     }
 }
