@@ -542,8 +542,13 @@ impl BuiltGroups<'_> {
                 (0, Some(r)) => Some(r.frame_schema()),
                 _ => self.schemas.get(&g),
             };
+            // A hole in the pipeline layout is not the same as an empty group.
+            let Some(schema) = schema else {
+                let _ = write!(key, "[{g}:hole]");
+                continue;
+            };
             let _ = write!(key, "[{g}:");
-            for b in schema.map_or(&[][..], |s| &s.bindings) {
+            for b in &schema.bindings {
                 let _ = write!(key, "({},{:?},{:?})", b.binding, b.visibility, b.ty);
             }
             key.push(']');
