@@ -164,10 +164,11 @@ pub fn rasterize_source() -> String {
 /// over each hull's screen rectangle, into the fixed-point accumulator.
 pub fn rasterize_compute_source() -> String {
     shader::compose_method(&format!(
-        "{}\n{}\n{BEAM_SHADING_WGSL}\n{}\n{RASTERIZE_COMPUTE_WGSL}",
+        "{}\n{}\n{BEAM_SHADING_WGSL}\n{}\n{}\n{RASTERIZE_COMPUTE_WGSL}",
         types_wgsl(),
         control::wgsl(),
-        shader::FIXED_POINT_WGSL
+        shader::FIXED_POINT_WGSL,
+        shader::RASTER_COUNTS_WGSL
     ))
 }
 

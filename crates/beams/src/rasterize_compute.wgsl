@@ -205,11 +205,3 @@ fn rect_offset(i: u32, width: u32, inv_width: f32) -> vec2<u32> {
     }
     return vec2<u32>(i - row * width, row);
 }
-
-// Adds `n` to the 64-bit count at words `w`, `w + 1`.
-fn add_count(w: u32, n: u32) {
-    let before = atomicAdd(&raster_counts[w], n);
-    if before > 0xffffffffu - n {
-        atomicAdd(&raster_counts[w + 1u], 1u);
-    }
-}

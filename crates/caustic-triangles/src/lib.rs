@@ -27,6 +27,17 @@
 //! 6. `camera_lookup` (§4.3): ρ/π · E at each camera pixel whose distance from the
 //!    centre matches the map's (`distance_test`).
 //!
+//! `raster=compute` (issue 17) replaces passes 4 and 5 by one compute pass of the name
+//! `triangles` (`triangles_compute.wgsl`): each triangle's invocation finds the texels
+//! of each face whose centres it covers with homogeneous edge functions (Olano & Greer
+//! 1997), interpolates as the rasterizer does and adds fs_triangle's value into a
+//! fixed-point accumulator with integer atomics (footprints over
+//! `raster_small_footprint` are walked by whole workgroups); the orphans' splats go into
+//! the same accumulator, which a last dispatch resolves into the cube map. The map is
+//! the same on every run, and within a stated bound of the hardware path's
+//! (`tests/accuracy.rs`): the odd texel on an edge shared by two triangles goes to the
+//! other one, since the rasterizer decides ties on snapped vertices.
+//!
 //! Every pass runs once per (light, caustic generator) pair: each has its own photon
 //! hit image, one light view fitted to the generator (a cube for a light inside it),
 //! and its own cube map; the camera passes add up (§4.1). Triangles do not cross
@@ -55,17 +66,17 @@
 use bytemuck::{Pod, Zeroable};
 use caustics_gpu::buffers::{storage_buffer, uniform_buffer};
 use caustics_gpu::limits::Reservation;
-use caustics_gpu::pass::{ComputePass, RasterPass, Shader};
+use caustics_gpu::pass::{Bindable, ComputePass, RasterPass, Shader, groups_2d};
 use caustics_gpu::textures::additive_hdr_target;
 use caustics_gpu::wgpu;
 use caustics_gpu::{Frame, GpuContext, GpuError, Renderer};
-use caustics_method::params::closed;
+use caustics_method::params::{Raster, closed};
 use caustics_method::{
     Capabilities, CausticsMethod, CounterDoc, Counters, Method, MethodError, Unsupported,
     method_params,
 };
 use caustics_scene::Scene;
-use photon_hits::{CausticMap, PhotonHitConfig, PhotonHits};
+use photon_hits::{AtlasAccumulator, CausticMap, PhotonHitConfig, PhotonHits};
 
 /// The shared photon-hit crate, for callers that read hits or the cube map back.
 pub use photon_hits;
@@ -74,9 +85,26 @@ const GRID_WGSL: &str = include_str!("grid.wgsl");
 const AREAS_WGSL: &str = include_str!("areas.wgsl");
 const TRIANGLES_WGSL: &str = include_str!("triangles.wgsl");
 const ORPHANS_WGSL: &str = include_str!("orphans.wgsl");
+const TRIANGLES_COMPUTE_WGSL: &str = include_str!("triangles_compute.wgsl");
+
+/// Workgroups of `rasterize_large` (triangles_compute.wgsl): each takes every
+/// `LARGE_WORKGROUPS`-th listed footprint; the ones with none left return at once.
+const LARGE_WORKGROUPS: u32 = 256;
+/// Bytes of the compute path's counts (`raster_counts` in triangles_compute.wgsl).
+const RASTER_COUNTS_BYTES: u64 = 16;
 
 fn pass_source(pass: &str) -> String {
     photon_hits::compose(&format!("{GRID_WGSL}\n{pass}"))
+}
+
+fn triangles_compute_source() -> String {
+    pass_source(&format!(
+        "{}\n{}\n{}\n{}\n{TRIANGLES_COMPUTE_WGSL}",
+        photon_hits::SPLAT_KERNEL_WGSL,
+        photon_hits::accumulator_wgsl(),
+        caustics_gpu::shader::RASTER_COUNTS_WGSL,
+        caustics_gpu::shader::TRIANGLE_RASTER_WGSL
+    ))
 }
 
 fn orphans_source() -> String {
@@ -111,6 +139,12 @@ method_params! {
         vertex_area: VertexArea = VertexArea::Fan;
         /// splat the hits none of whose triangles is kept as one cube-map texel each, so their light is not lost (paper: false)
         splat_orphans: bool = false;
+        /// how the triangles reach the cube map: hardware (drawn, additive blending: the paper's) or compute (compute kernels find each triangle's covered texels with homogeneous edge functions and add them into a fixed-point accumulator with integer atomics, then resolved: the same image on every run)
+        raster: Raster = Raster::Hardware;
+        // At most 8192: an invocation walks up to six such footprints (a triangle on
+        // every face), under llvmpipe's 65,535 loop iterations per invocation.
+        /// with raster = compute: a triangle's footprint on a face (its bounding rectangle) of up to this many texels is walked by the triangle's own invocation, a larger one by a workgroup of 64
+        raster_small_footprint: u32 = 256 => closed(0.0, 8192.0);
     }
 }
 
@@ -192,6 +226,9 @@ pub const TRIANGLE_COUNTER_DOCS: &[CounterDoc] = &[
     CounterDoc { name: "triangles_dropped_path_mismatch", doc: "triangles dropped because their hits took different specular paths (path ids: the side of the generator the light met, the number of further bounces off a mirror)" },
     CounterDoc { name: "triangles_dropped_stretched", doc: "triangles dropped because their area on the receiver exceeds max_stretch x the area their light had at the generator (half the mean texel footprint): a span across a silhouette or a grazing exit" },
     CounterDoc { name: "triangles_dropped_degenerate", doc: "triangles dropped because their area on the receiver is zero (coincident or collinear hits)" },
+    CounterDoc { name: "raster_texels_covered", doc: "with raster = compute: (triangle, cube-map texel) pairs whose texel centre a kept triangle covers, each adding its light (the hardware path's triangles fragments)" },
+    CounterDoc { name: "raster_large_footprints", doc: "with raster = compute: (triangle, face) footprints larger than raster_small_footprint, walked by a workgroup of 64 invocations instead of the triangle's own" },
+    CounterDoc { name: "raster_footprints_walked_by_lane", doc: "with raster = compute: large footprints the list had no room for, walked by the triangle's own invocation (same light, slower)" },
     CounterDoc { name: "photon_hits_without_triangles", doc: "valid photon hits none of whose triangles is kept (orphans), counted by the vertex_irradiance pass: their light is lost unless splat_orphans draws each as a one-texel splat" },
 ];
 
@@ -208,12 +245,44 @@ pub struct Reconstruction {
     hits: PhotonHits,
     map: CausticMap,
     areas: ComputePass,
-    triangles: RasterPass,
-    /// With `splat_orphans`: the one-texel splats of the hits no kept triangle carries.
-    orphans: Option<RasterPass>,
+    /// The triangles (and orphans) into the cube map, on the hardware or compute path.
+    draw: TriangleDraw,
     buffers: TriangleBuffers,
     triangle_count: u32,
     bytes: u64,
+}
+
+/// How a reconstruction's triangles reach its cube map.
+enum TriangleDraw {
+    /// Drawn with additive blending (the paper's).
+    Hardware {
+        triangles: RasterPass,
+        /// With `splat_orphans`: the one-texel splats of the hits no kept triangle
+        /// carries.
+        orphans: Option<RasterPass>,
+    },
+    /// Added into a fixed-point accumulator by compute kernels, then resolved.
+    Compute(ComputeDraw),
+}
+
+/// The compute path's pass and buffers.
+struct ComputeDraw {
+    /// Kernels `rasterize`, `rasterize_large`, `orphan_splats`, `resolve`.
+    pass: ComputePass,
+    accumulator: AtlasAccumulator,
+    /// (triangle, face) of the footprints walked by workgroups.
+    large: wgpu::Buffer,
+    /// `raster_counts`: cleared each frame, read by `counters`.
+    raster_counts: wgpu::Buffer,
+    splat_orphans: bool,
+    /// The list's hold on the memory ledger.
+    _memory: Reservation,
+}
+
+impl ComputeDraw {
+    fn bytes(&self) -> u64 {
+        self.accumulator.bytes() + self.large.size() + self.raster_counts.size()
+    }
 }
 
 /// The reconstruction's own buffers.
@@ -344,7 +413,7 @@ impl Reconstruction {
         params: &CausticTrianglesParams,
         hits: PhotonHits,
     ) -> Result<Self, MethodError> {
-        let map = CausticMap::new(ctx, renderer, NAME, hits.center, hits.reach, &params.hits)?;
+        let map = CausticMap::for_raster(ctx, renderer, NAME, &hits, &params.hits, params.raster)?;
         let n = hits.resolution;
         let triangle_count = hits.layers * (n - 1) * (n - 1) * 2;
         let b = TriangleBuffers::new(
@@ -372,59 +441,27 @@ impl Reconstruction {
             )
             .kernels(&["triangle_areas", "vertex_irradiance_pass"])
             .build()?;
-        // §4.2: every kept triangle into the six faces of the cube map, additively.
-        let triangles_shader = Shader::new(
-            ctx,
-            "caustic-triangles triangles.wgsl",
-            pass_source(TRIANGLES_WGSL),
-        )?;
-        // No culling (the builder's default): triangles folded over a caustic curve
-        // face the other way, and both count.
-        let triangles = RasterPass::builder(
-            ctx,
-            &format!("{NAME}/triangles"),
-            &triangles_shader,
-            "vs_triangle",
-        )
-        .frame(renderer)
-        .bind(
-            1,
-            &[
-                ("cm", map.uniform()),
-                ("tri", &b.uniform),
-                ("hits", &hits.hits),
-                ("tri_area", &b.tri_area),
-                ("vertex_irradiance", &b.vertex_irradiance),
-            ],
-        )
-        .fragment("fs_triangle", &[Some(additive_hdr_target())])
-        .build()?;
-        let orphans = if params.splat_orphans {
-            let shader = Shader::new(ctx, "caustic-triangles orphans.wgsl", orphans_source())?;
-            Some(
-                RasterPass::builder(ctx, &format!("{NAME}/orphan_splats"), &shader, "vs_orphan")
-                    .frame(renderer)
-                    .bind(
-                        1,
-                        &[
-                            ("cm", map.uniform()),
-                            ("hits", &hits.hits),
-                            ("vertex_irradiance", &b.vertex_irradiance),
-                        ],
-                    )
-                    .fragment("fs_splat", &[Some(additive_hdr_target())])
-                    .build()?,
-            )
-        } else {
-            None
+        let draw = match params.raster {
+            Raster::Hardware => hardware_draw(ctx, renderer, params, &hits, &map, &b)?,
+            Raster::Compute => TriangleDraw::Compute(compute_draw(
+                ctx,
+                renderer,
+                params,
+                &hits,
+                &map,
+                &b,
+                triangle_count,
+            )?),
         };
-        let bytes = b.bytes() + hits.bytes() + map.bytes();
+        let mut bytes = b.bytes() + hits.bytes() + map.bytes();
+        if let TriangleDraw::Compute(c) = &draw {
+            bytes += c.bytes();
+        }
         Ok(Self {
             hits,
             map,
             areas,
-            triangles,
-            orphans,
+            draw,
             buffers: b,
             triangle_count,
             bytes,
@@ -452,6 +489,148 @@ impl Reconstruction {
         )?;
         Ok(bytemuck::pod_collect_to_vec(&bytes))
     }
+}
+
+/// What the triangles pass reads on either path (triangles.wgsl and
+/// triangles_compute.wgsl declare these alike).
+fn triangle_inputs<'a>(
+    hits: &'a PhotonHits,
+    map: &'a CausticMap,
+    b: &'a TriangleBuffers,
+) -> [(&'static str, &'a dyn Bindable); 5] {
+    [
+        ("cm", map.uniform()),
+        ("tri", &b.uniform),
+        ("hits", &hits.hits),
+        ("tri_area", &b.tri_area),
+        ("vertex_irradiance", &b.vertex_irradiance),
+    ]
+}
+
+/// The paper's path: the kept triangles drawn into the six faces, additively (§4.2),
+/// and with `splat_orphans` the orphans' one-texel splats after them.
+fn hardware_draw(
+    ctx: &GpuContext,
+    renderer: &Renderer,
+    params: &CausticTrianglesParams,
+    hits: &PhotonHits,
+    map: &CausticMap,
+    b: &TriangleBuffers,
+) -> Result<TriangleDraw, MethodError> {
+    let triangles_shader = Shader::new(
+        ctx,
+        "caustic-triangles triangles.wgsl",
+        pass_source(TRIANGLES_WGSL),
+    )?;
+    // No culling (the builder's default): triangles folded over a caustic curve face the
+    // other way, and both count.
+    let triangles = RasterPass::builder(
+        ctx,
+        &format!("{NAME}/triangles"),
+        &triangles_shader,
+        "vs_triangle",
+    )
+    .frame(renderer)
+    .bind(1, &triangle_inputs(hits, map, b))
+    .fragment("fs_triangle", &[Some(additive_hdr_target())])
+    .build()?;
+    let orphans = if params.splat_orphans {
+        let shader = Shader::new(ctx, "caustic-triangles orphans.wgsl", orphans_source())?;
+        Some(
+            RasterPass::builder(ctx, &format!("{NAME}/orphan_splats"), &shader, "vs_orphan")
+                .frame(renderer)
+                .bind(
+                    1,
+                    &[
+                        ("cm", map.uniform()),
+                        ("hits", &hits.hits),
+                        ("vertex_irradiance", &b.vertex_irradiance),
+                    ],
+                )
+                .fragment("fs_splat", &[Some(additive_hdr_target())])
+                .build()?,
+        )
+    } else {
+        None
+    };
+    Ok(TriangleDraw::Hardware { triangles, orphans })
+}
+
+/// `raster=compute`: the kernels of triangles_compute.wgsl, their accumulator, the list
+/// of large footprints and the counts.
+fn compute_draw(
+    ctx: &GpuContext,
+    renderer: &Renderer,
+    params: &CausticTrianglesParams,
+    hits: &PhotonHits,
+    map: &CausticMap,
+    b: &TriangleBuffers,
+    triangle_count: u32,
+) -> Result<ComputeDraw, MethodError> {
+    let accumulator = AtlasAccumulator::new(ctx, NAME, map)?;
+    // Room for a large footprint per 16 triangles (they are the few near the centre or
+    // across faces); past it the triangle's own invocation walks the footprint, slower
+    // but with the same sums (`raster_footprints_walked_by_lane` counts them).
+    let large_entries = u64::from(triangle_count / 16).max(1024);
+    let large_bytes = large_entries * 8;
+    let memory = ctx
+        .reserve_storage(
+            &format!(
+                "resolution: the caustic triangles' list of large footprints ({large_entries} x 8 bytes)"
+            ),
+            large_bytes,
+            "lower resolution",
+        )
+        .map_err(|e| MethodError::Param {
+            method: NAME,
+            message: e.to_string(),
+        })?;
+    let (large, raster_counts) = ctx.checked("caustic-triangles compute setup", || {
+        (
+            storage_buffer(
+                &ctx.device,
+                "caustic triangles large footprints",
+                large_bytes,
+                false,
+            ),
+            storage_buffer(
+                &ctx.device,
+                "caustic triangles raster counts",
+                RASTER_COUNTS_BYTES,
+                true,
+            ),
+        )
+    })?;
+    let shader = Shader::new(
+        ctx,
+        "caustic-triangles triangles_compute.wgsl",
+        triangles_compute_source(),
+    )?;
+    let mut kernels = vec!["rasterize", "rasterize_large", "resolve"];
+    if params.splat_orphans {
+        kernels.push("orphan_splats");
+    }
+    let mut entries = triangle_inputs(hits, map, b).to_vec();
+    entries.extend([
+        ("accum", &accumulator.buffer as &dyn Bindable),
+        ("atlas_out", &map.atlas.view),
+        ("large", &large),
+        ("raster_counts", &raster_counts),
+    ]);
+    let pass = ComputePass::builder(ctx, &format!("{NAME}/triangles"), &shader)
+        .frame(renderer)
+        .bind(1, &entries)
+        .kernels(&kernels)
+        .constants(&[("small_texels", f64::from(params.raster_small_footprint))])
+        .build()?;
+    Ok(ComputeDraw {
+        pass,
+        accumulator,
+        large,
+        raster_counts,
+        splat_orphans: params.splat_orphans,
+        _memory: memory,
+    })
 }
 
 impl CausticsMethod for CausticTriangles {
@@ -500,20 +679,40 @@ impl Reconstruction {
                 "vertex_irradiance_pass",
                 [self.hits.texels().div_ceil(64), 1, 1],
             )?;
-        {
-            let target = self.map.reconstruction_attachment();
-            let mut pass = self.triangles.begin(frame, &target, None)?;
-            for face in 0..6 {
-                self.map.set_face(&mut pass, face);
-                pass.draw(0..3 * self.triangle_count, face..face + 1);
+        match &self.draw {
+            TriangleDraw::Hardware { triangles, orphans } => {
+                {
+                    let target = self.map.reconstruction_attachment();
+                    let mut pass = triangles.begin(frame, &target, None)?;
+                    for face in 0..6 {
+                        self.map.set_face(&mut pass, face);
+                        pass.draw(0..3 * self.triangle_count, face..face + 1);
+                    }
+                }
+                if let Some(orphans) = orphans {
+                    let target = self.map.added_attachment();
+                    let mut pass = orphans.begin(frame, &target, None)?;
+                    for face in 0..6 {
+                        self.map.set_face(&mut pass, face);
+                        pass.draw(0..6 * self.hits.texels(), face..face + 1);
+                    }
+                }
             }
-        }
-        if let Some(orphans) = &self.orphans {
-            let target = self.map.added_attachment();
-            let mut pass = orphans.begin(frame, &target, None)?;
-            for face in 0..6 {
-                self.map.set_face(&mut pass, face);
-                pass.draw(0..6 * self.hits.texels(), face..face + 1);
+            TriangleDraw::Compute(c) => {
+                frame.encoder.clear_buffer(&c.raster_counts, 0, None);
+                let mut pass = c.pass.begin(frame)?;
+                pass.dispatch(
+                    "rasterize",
+                    groups_2d(u64::from(self.triangle_count).div_ceil(64)),
+                )?;
+                pass.dispatch("rasterize_large", [LARGE_WORKGROUPS, 1, 1])?;
+                if c.splat_orphans {
+                    pass.dispatch(
+                        "orphan_splats",
+                        groups_2d(u64::from(self.hits.texels()).div_ceil(64)),
+                    )?;
+                }
+                pass.dispatch("resolve", AtlasAccumulator::resolve_groups(&self.map))?;
             }
         }
         Ok(())
@@ -532,6 +731,22 @@ impl Reconstruction {
             out.insert((*name).into(), *v as u64);
         }
         out.insert(ORPHAN_COUNTER.1.into(), c[TRI_REASONS.len()] as u64);
+        // The compute rasterizer's work only where it runs (the hardware path's is its
+        // triangles pass's fragments).
+        if let TriangleDraw::Compute(draw) = &self.draw {
+            let w = caustics_gpu::readback::read_buffer_u32(
+                ctx,
+                &draw.raster_counts,
+                RASTER_COUNTS_BYTES,
+                "caustic triangle raster counts",
+            )?;
+            out.insert("raster_large_footprints".into(), u64::from(w[0]));
+            out.insert("raster_footprints_walked_by_lane".into(), u64::from(w[1]));
+            out.insert(
+                "raster_texels_covered".into(),
+                u64::from(w[2]) | (u64::from(w[3]) << 32),
+            );
+        }
         Ok(out)
     }
 }
@@ -547,7 +762,8 @@ mod tests {
     fn shaders_validate() -> Result<(), String> {
         shader::validate_wgsl("orphans.wgsl", &orphans_source())?;
         shader::validate_wgsl("areas.wgsl", &pass_source(AREAS_WGSL))?;
-        shader::validate_wgsl("triangles.wgsl", &pass_source(TRIANGLES_WGSL))
+        shader::validate_wgsl("triangles.wgsl", &pass_source(TRIANGLES_WGSL))?;
+        shader::validate_wgsl("triangles_compute.wgsl", &triangles_compute_source())
     }
 
     #[test]
@@ -568,7 +784,13 @@ mod tests {
     #[test]
     fn every_triangle_counter_is_documented() {
         let mut names: Vec<&str> = TRI_REASONS.iter().map(|(_, n)| *n).collect();
-        names.extend(["triangles", ORPHAN_COUNTER.1]);
+        names.extend([
+            "triangles",
+            ORPHAN_COUNTER.1,
+            "raster_texels_covered",
+            "raster_large_footprints",
+            "raster_footprints_walked_by_lane",
+        ]);
         if let Err(e) = caustics_method::CounterDoc::check(TRIANGLE_COUNTER_DOCS, &names) {
             panic!("{e}");
         }
@@ -609,6 +831,11 @@ mod tests {
             (serde_json::json!({"max_stretch": 0.5}), "max_stretch"),
             (serde_json::json!({"max_stretch": 1e308}), "max_stretch"),
             (serde_json::json!({"distance_test": "yes"}), "distance_test"),
+            (serde_json::json!({"raster": "gpu"}), "raster"),
+            (
+                serde_json::json!({"raster_small_footprint": 9000}),
+                "raster_small_footprint",
+            ),
             (serde_json::json!({"kernel_px": 4}), "known parameters"),
         ] {
             let msg = parse::<CausticTrianglesParams>(NAME, &json)

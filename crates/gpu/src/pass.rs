@@ -885,6 +885,15 @@ impl<'a> ComputePassBuilder<'a> {
     }
 }
 
+/// Workgroups for `groups` workgroups of a 1-D kernel as (x, y, 1), x at most 32,768
+/// (the device's per-dimension limit is at least 65,535): the kernel reads its linear
+/// invocation index as `gid.y · num_workgroups.x · size + gid.x` (size: its workgroup
+/// size) and returns past its count.
+pub fn groups_2d(groups: u64) -> [u32; 3] {
+    let x = groups.clamp(1, 1 << 15);
+    [x as u32, groups.div_ceil(x).max(1) as u32, 1]
+}
+
 /// An open compute pass; derefs to the wgpu pass for anything not wrapped here.
 pub struct ComputeRecorder<'f> {
     pass: ProfiledComputePass<'f>,
@@ -1227,6 +1236,14 @@ impl DerefMut for RasterRecorder<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn dispatches_cover_every_workgroup() {
+        assert_eq!(groups_2d(0), [1, 1, 1]);
+        assert_eq!(groups_2d(100), [100, 1, 1]);
+        let [x, y, _] = groups_2d(70_000);
+        assert!(u64::from(x) * u64::from(y) >= 70_000 && x <= 1 << 15);
+    }
 
     const SRC: &str = "
         @group(0) @binding(0) var<uniform> u: vec4<f32>;

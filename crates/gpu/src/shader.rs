@@ -14,6 +14,14 @@ pub const DIRECT_WGSL: &str = include_str!("shaders/direct.wgsl");
 /// 64-bit fixed-point accumulation with integer atomics (`add_fixed`, `take_fixed`) of the
 /// compute-raster paths; the including shader declares `accum: array<atomic<u32>>`.
 pub const FIXED_POINT_WGSL: &str = include_str!("shaders/fixed_point.wgsl");
+/// 64-bit work counts of the compute-raster paths, summed per workgroup (`add_count`,
+/// `group_count_begin`, `group_count_end`); the including shader declares
+/// `raster_counts: array<atomic<u32>, N>`.
+pub const RASTER_COUNTS_WGSL: &str = include_str!("shaders/raster_counts.wgsl");
+/// Triangle scan conversion of the compute-raster paths (`triangle_footprint`,
+/// `footprint_barycentrics`): the pixels a triangle covers and the rasterizer's
+/// perspective-correct barycentrics there, from clip coordinates; no bindings.
+pub const TRIANGLE_RASTER_WGSL: &str = include_str!("shaders/triangle_raster.wgsl");
 /// Fractional bits of [`FIXED_POINT_WGSL`]'s numbers: contributions are rounded to the
 /// nearest multiple of 2^-24.
 pub const FIXED_POINT_FRAC_BITS: u32 = 24;
@@ -79,6 +87,23 @@ mod tests {
             &format!(
                 "@group(0) @binding(0) var<storage, read_write> accum: array<atomic<u32>>;\n{FIXED_POINT_WGSL}\n\
                  @compute @workgroup_size(1) fn k() {{ add_fixed(0u, take_fixed(2u)); }}"
+            ),
+        )?;
+        validate_wgsl(
+            "raster_counts.wgsl",
+            &format!(
+                "@group(0) @binding(0) var<storage, read_write> raster_counts: array<atomic<u32>, 2>;\n\
+                 {RASTER_COUNTS_WGSL}\n@compute @workgroup_size(64) fn k(\
+                 @builtin(local_invocation_index) lane: u32) {{ group_count_begin(lane); \
+                 group_count_end(lane, 1u, 0u); }}"
+            ),
+        )?;
+        validate_wgsl(
+            "triangle_raster.wgsl",
+            &format!(
+                "{TRIANGLE_RASTER_WGSL}\n@compute @workgroup_size(1) fn k() {{\n\
+                 let f = triangle_footprint(vec4<f32>(0.0), vec4<f32>(1.0), vec4<f32>(2.0), vec2<f32>(8.0));\n\
+                 _ = footprint_barycentrics(f, vec2<u32>(footprint_pixels(f)), vec2<f32>(8.0)); }}"
             ),
         )
     }

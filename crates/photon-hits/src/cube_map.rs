@@ -13,6 +13,7 @@ use caustics_gpu::textures::{HDR_FORMAT, Target, additive_hdr_target, load_attac
 use caustics_gpu::wgpu;
 use caustics_gpu::{Frame, GpuContext, GpuError, Renderer};
 use caustics_method::MethodError;
+use caustics_method::params::Raster;
 use caustics_scene::{Mat4, Vec3};
 
 use caustics_gpu::buffers::uniform_buffer;
@@ -68,6 +69,31 @@ impl CausticMap {
             reach,
             config,
             wgpu::TextureUsages::empty(),
+        )
+    }
+
+    /// [`CausticMap::new`] around `hits`' generator for a reconstruction on `raster`'s
+    /// path (the compute path's resolve writes the atlas as a storage texture).
+    pub fn for_raster(
+        ctx: &GpuContext,
+        renderer: &Renderer,
+        method: &'static str,
+        hits: &crate::PhotonHits,
+        config: &PhotonHitConfig,
+        raster: Raster,
+    ) -> Result<Self, MethodError> {
+        let usage = match raster {
+            Raster::Hardware => wgpu::TextureUsages::empty(),
+            Raster::Compute => wgpu::TextureUsages::STORAGE_BINDING,
+        };
+        Self::with_atlas_usage(
+            ctx,
+            renderer,
+            method,
+            hits.center,
+            hits.reach,
+            config,
+            usage,
         )
     }
 

@@ -67,8 +67,10 @@
 //! it against the scene's BVH and analytic shapes ([`caustics_gpu::triangle_bvh`]),
 //! and carries the share of its light on the generator's side (`photon_hits_silhouette`).
 
+mod accumulator;
 mod cube_map;
 
+pub use accumulator::{ATLAS_WORDS_PER_TEXEL, AtlasAccumulator, accumulator_wgsl};
 pub use cube_map::{CausticMap, face_origin};
 
 use bytemuck::{Pod, Zeroable};

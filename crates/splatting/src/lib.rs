@@ -44,7 +44,7 @@
 //! ```
 
 use bytemuck::{Pod, Zeroable};
-use caustics_gpu::pass::{ComputePass, RasterPass, Shader};
+use caustics_gpu::pass::{ComputePass, RasterPass, Shader, groups_2d};
 use caustics_gpu::textures::additive_hdr_target;
 use caustics_gpu::wgpu::{self, util::DeviceExt};
 use caustics_gpu::{Frame, GpuContext, Renderer};
@@ -54,14 +54,10 @@ use caustics_method::{
     method_params,
 };
 use caustics_scene::Scene;
-use photon_hits::{CausticMap, PhotonHitConfig, PhotonHits};
+use photon_hits::{AtlasAccumulator, CausticMap, PhotonHitConfig, PhotonHits};
 
 const SPLAT_WGSL: &str = include_str!("splat.wgsl");
 const SPLAT_COMPUTE_WGSL: &str = include_str!("splat_compute.wgsl");
-
-/// u32 words per atlas texel of the compute path's accumulator (`WORDS` in
-/// splat_compute.wgsl): a fixed-point channel for each of r, g, b and alpha.
-const ACCUM_WORDS_PER_TEXEL: u64 = 4 * caustics_gpu::shader::FIXED_POINT_WORDS;
 
 /// Registry name.
 pub const NAME: &str = "splatting";
@@ -168,9 +164,7 @@ enum SplatPass {
     /// The compute splat and resolve, and the fixed-point accumulator they share.
     Compute {
         pass: ComputePass,
-        _accumulator: wgpu::Buffer,
-        /// The accumulator's hold on the memory ledger, given back with it.
-        _reservation: caustics_gpu::limits::Reservation,
+        _accumulator: AtlasAccumulator,
     },
 }
 
@@ -241,40 +235,15 @@ impl Splatting {
                     (map, SplatPass::Hardware(pass))
                 }
                 Raster::Compute => {
-                    let map = CausticMap::with_atlas_usage(
+                    let map = CausticMap::for_raster(
                         ctx,
                         renderer,
                         NAME,
-                        hits.center,
-                        hits.reach,
+                        &hits,
                         &params.hits,
-                        wgpu::TextureUsages::STORAGE_BINDING,
+                        params.raster,
                     )?;
-                    let size = u64::from(map.size);
-                    let accumulator_bytes = 6 * size * size * ACCUM_WORDS_PER_TEXEL * 4;
-                    let what = format!(
-                        "cube_size: the compute splat's fixed-point accumulator ({} texels x {} bytes)",
-                        6 * size * size,
-                        ACCUM_WORDS_PER_TEXEL * 4
-                    );
-                    let param = |e: caustics_gpu::GpuError| MethodError::Param {
-                        method: NAME,
-                        message: e.to_string(),
-                    };
-                    ctx.limits
-                        .storage(&what, accumulator_bytes, "lower cube_size")
-                        .map_err(param)?;
-                    let reservation = ctx
-                        .memory
-                        .reserve(&what, accumulator_bytes, "lower cube_size")
-                        .map_err(param)?;
-                    // Zero at creation; each resolve zeroes what it read.
-                    let accumulator = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-                        label: Some("splatting compute accumulator"),
-                        size: accumulator_bytes,
-                        usage: wgpu::BufferUsages::STORAGE,
-                        mapped_at_creation: false,
-                    });
+                    let accumulator = AtlasAccumulator::new(ctx, NAME, &map)?;
                     let pass = ComputePass::builder(ctx, "splatting/splat", &shader)
                         .frame(renderer)
                         .bind(
@@ -283,19 +252,18 @@ impl Splatting {
                                 ("cm", map.uniform()),
                                 ("su", &splat_uniform),
                                 ("hits", &hits.hits),
-                                ("accum", &accumulator),
+                                ("accum", &accumulator.buffer),
                                 ("atlas_out", &map.atlas.view),
                             ],
                         )
                         .kernels(&["splat", "resolve"])
                         .build()?;
-                    bytes += accumulator_bytes;
+                    bytes += accumulator.bytes();
                     (
                         map,
                         SplatPass::Compute {
                             pass,
                             _accumulator: accumulator,
-                            _reservation: reservation,
                         },
                     )
                 }
@@ -346,11 +314,9 @@ impl CausticsMethod for Splatting {
                     }
                     SplatPass::Compute { pass, .. } => {
                         let rows = u64::from(hits.texels()) * u64::from(self.kernel_px);
-                        let atlas = (3 * map.size, 2 * map.size);
                         let mut recorder = pass.begin(frame)?;
                         recorder.dispatch("splat", groups_2d(rows.div_ceil(64)))?;
-                        recorder
-                            .dispatch("resolve", [atlas.0.div_ceil(8), atlas.1.div_ceil(8), 1])?;
+                        recorder.dispatch("resolve", AtlasAccumulator::resolve_groups(map))?;
                     }
                 }
             }
@@ -381,15 +347,8 @@ fn splat_compute_source() -> String {
     photon_hits::compose(&format!(
         "{}\n{}\n{SPLAT_COMPUTE_WGSL}",
         photon_hits::SPLAT_KERNEL_WGSL,
-        caustics_gpu::shader::FIXED_POINT_WGSL
+        photon_hits::accumulator_wgsl()
     ))
-}
-
-/// Workgroups for `groups` of 64 invocations as (x, y, 1), x at most 32,768; the kernel
-/// reads its linear index as `y · x · 64 + gid.x`.
-fn groups_2d(groups: u64) -> [u32; 3] {
-    let x = groups.clamp(1, 1 << 15);
-    [x as u32, groups.div_ceil(x).max(1) as u32, 1]
 }
 
 #[cfg(test)]
@@ -412,18 +371,6 @@ mod tests {
     fn splat_uniform_matches_its_wgsl() {
         caustics_gpu::assert_wgsl_layout!(splat_source(), SplatUniform { kernel_px });
         caustics_gpu::assert_wgsl_layout!(splat_compute_source(), SplatUniform { kernel_px });
-        assert!(
-            SPLAT_COMPUTE_WGSL.contains(&format!("const WORDS: u32 = {ACCUM_WORDS_PER_TEXEL}u;")),
-            "ACCUM_WORDS_PER_TEXEL and the shader's WORDS agree"
-        );
-    }
-
-    #[test]
-    fn dispatches_cover_every_row() {
-        assert_eq!(groups_2d(0), [1, 1, 1]);
-        assert_eq!(groups_2d(100), [100, 1, 1]);
-        let [x, y, _] = groups_2d(70_000);
-        assert!(u64::from(x) * u64::from(y) >= 70_000 && x <= 1 << 15);
     }
 
     #[test]

@@ -9,7 +9,8 @@
 // for alpha.
 //
 // No tile binning: one invocation per (hit, kernel row) adds its row's texels straight
-// into the accumulator. Kernels are at most 64 × 64 texels, the small-footprint regime
+// into the accumulator (photon-hits' atlas_accumulator.wgsl, which also holds the
+// `resolve` kernel). Kernels are at most 64 × 64 texels, the small-footprint regime
 // in which Schütz, Kerbl & Wimmer (2021, "Rendering point clouds with compute shaders
 // and vertex order optimization") find direct global atomics fastest for points.
 
@@ -20,9 +21,6 @@ struct SplatUniform {
     pad1: u32,
     pad2: u32,
 }
-
-// Words per atlas texel: (low, high) for r, g, b and alpha.
-const WORDS: u32 = 8u;
 
 @group(1) @binding(0) var<uniform> cm: CausticMapUniform;
 @group(1) @binding(1) var<uniform> su: SplatUniform;
@@ -50,9 +48,6 @@ fn splat(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
     let face = u32(fuv.z);
     let kf = f32(k);
     let origin = splat_origin(fuv.xy, kf);
-    let s = u32(cm.params.x);
-    let face_origin = vec2<u32>((face % 3u) * s, (face / 3u) * s);
-    let atlas_width = 3u * s;
     let share = h.flux.rgb / (kf * kf);
     let y = u32(origin.y) + row;
     for (var c = 0u; c < k; c++) {
@@ -60,24 +55,6 @@ fn splat(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
         // The texel's centre, as the fragment shader sees it.
         let local = vec2<f32>(f32(x), f32(y)) + 0.5;
         let value = splat_texel(face, local, share, h.normal.xyz, length(l), l);
-        let texel = (face_origin.y + y) * atlas_width + face_origin.x + x;
-        let w = texel * WORDS;
-        add_fixed(w, value.r);
-        add_fixed(w + 2u, value.g);
-        add_fixed(w + 4u, value.b);
-        add_fixed(w + 6u, value.a);
+        add_atlas(face, vec2<u32>(x, y), value);
     }
-}
-
-// One invocation per atlas texel: the accumulated sums into the atlas (every texel
-// written, so no clear is needed), and the accumulator zeroed for the next frame.
-@compute @workgroup_size(8, 8)
-fn resolve(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let size = textureDimensions(atlas_out);
-    if gid.x >= size.x || gid.y >= size.y {
-        return;
-    }
-    let w = (gid.y * size.x + gid.x) * WORDS;
-    let value = vec4<f32>(take_fixed(w), take_fixed(w + 2u), take_fixed(w + 4u), take_fixed(w + 6u));
-    textureStore(atlas_out, vec2<i32>(gid.xy), value);
 }

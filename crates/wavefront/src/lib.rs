@@ -38,16 +38,25 @@
 //! one-pixel points of a third of its flux each (`orphans.wgsl`), which a bumpy
 //! refractor's speckle of total internal reflections needs. Like the original it
 //! point-samples triangles thinner than a pixel (noisy cusps), and it renders no media.
+//!
+//! `raster=compute` (issue 17) replaces the raster splat by a compute pass of the same
+//! name (`splat_compute.wgsl`): each kept triangle's invocation finds the pixels whose
+//! centres it covers with homogeneous edge functions (Olano & Greer 1997), makes the
+//! fragment shader's tests there and adds its radiance into a camera-sized fixed-point
+//! accumulator with integer atomics (footprints over `raster_small_footprint` pixels
+//! are walked by whole workgroups); a full-screen `resolve` adds the sums into the
+//! surface caustic. The image is the same on every run, and within a stated bound of
+//! the hardware path's (`tests/accuracy.rs`). The orphans' points stay rasterized.
 
 mod sources;
 
 use bytemuck::{Pod, Zeroable};
 use caustics_gpu::limits::Reservation;
-use caustics_gpu::pass::{BindGroupSchema, ComputePass, RasterPass, Shader};
+use caustics_gpu::pass::{BindGroupSchema, ComputePass, RasterPass, Shader, groups_2d};
 use caustics_gpu::textures::{additive_hdr_target, load_attachment};
 use caustics_gpu::wgpu::{self, util::DeviceExt};
 use caustics_gpu::{Frame, GpuContext, Renderer, shader};
-use caustics_method::params::{above, closed};
+use caustics_method::params::{Raster, above, closed};
 use caustics_method::{
     Capabilities, CausticsMethod, CounterDoc, Counters, Method, MethodError, Unsupported,
     method_params,
@@ -62,6 +71,17 @@ const TRACE_WGSL: &str = include_str!("trace.wgsl");
 const CLASSIFY_WGSL: &str = include_str!("classify.wgsl");
 const SPLAT_WGSL: &str = include_str!("splat.wgsl");
 const ORPHANS_WGSL: &str = include_str!("orphans.wgsl");
+const SPLAT_COMPUTE_WGSL: &str = include_str!("splat_compute.wgsl");
+const RESOLVE_WGSL: &str = include_str!("resolve.wgsl");
+
+/// u32 words per pixel of the compute path's accumulator (`ACCUM_WORDS` in
+/// splat_compute.wgsl and resolve.wgsl): r, g, b, each a 64-bit fixed-point number.
+const ACCUM_WORDS_PER_PIXEL: u64 = 3 * shader::FIXED_POINT_WORDS;
+/// Bytes of the compute path's counts (`raster_counts` in splat_compute.wgsl).
+const RASTER_COUNTS_BYTES: u64 = 24;
+/// Workgroups of `splat_large`: each takes every `LARGE_WORKGROUPS`-th listed
+/// footprint; the ones with none left return at once.
+const LARGE_WORKGROUPS: u32 = 256;
 /// Group 1 of the splat and orphans passes (one sheet's drawing inputs).
 const SHEET_DRAW_WGSL: &str = include_str!("sheet_draw.wgsl");
 
@@ -73,6 +93,20 @@ fn pass_source(pass: &str) -> String {
 /// A camera-side pass (splat, orphans): its bindings of one sheet, then the pass.
 fn draw_source(pass: &str) -> String {
     pass_source(&format!("{SHEET_DRAW_WGSL}\n{pass}"))
+}
+
+/// The compute splat: the scan conversion and fixed-point functions before the pass.
+fn splat_compute_source() -> String {
+    draw_source(&format!(
+        "{}\n{}\n{}\n{SPLAT_COMPUTE_WGSL}",
+        shader::FIXED_POINT_WGSL,
+        shader::RASTER_COUNTS_WGSL,
+        shader::TRIANGLE_RASTER_WGSL
+    ))
+}
+
+fn resolve_source() -> String {
+    shader::compose_method(&format!("{}\n{RESOLVE_WGSL}", shader::FIXED_POINT_WGSL))
 }
 
 /// The trace pass also traces rays against the scene's triangle BVH (group 2).
@@ -107,6 +141,11 @@ method_params! {
         /// landed vertex, a third of the triangle's flux each (Wallace: false, that light
         /// is lost)
         splat_orphans: bool = false;
+        /// how the kept triangles reach the image: hardware (drawn, additive blending: Wallace's) or compute (compute kernels find each triangle's covered pixels with homogeneous edge functions and add them into a fixed-point accumulator with integer atomics, then resolved: the same image on every run)
+        raster: Raster = Raster::Hardware;
+        // At most 8192: under llvmpipe's 65,535 loop iterations per invocation.
+        /// with raster = compute: a triangle's footprint (its bounding rectangle) of up to this many pixels is walked by the triangle's own invocation, a larger one by a workgroup of 64
+        raster_small_footprint: u32 = 256 => closed(0.0, 8192.0);
     }
 }
 
@@ -245,6 +284,9 @@ const COUNTER_DOCS: &[CounterDoc] = &[
     CounterDoc { name: "dropped_receiver_mismatch", doc: "triangles dropped because their vertices landed on different receivers, or on different sides of one" },
     CounterDoc { name: "dropped_path_mismatch", doc: "triangles dropped because their vertices took different specular paths (the objects met and the side each was met from, in order)" },
     CounterDoc { name: "orphan_corners", doc: "with splat_orphans: landed vertices of dropped triangles, once per dropped triangle they are a corner of, each drawn as a one-pixel point of a third of its triangle's flux (without splat_orphans that light is lost)" },
+    CounterDoc { name: "raster_pixels_covered", doc: "with raster = compute: (triangle, pixel) pairs whose pixel centre a kept triangle covers, each then tested as a fragment (the hardware path's splat fragments)" },
+    CounterDoc { name: "raster_large_footprints", doc: "with raster = compute: kept triangles whose footprint exceeds raster_small_footprint pixels, walked by a workgroup of 64 invocations instead of the triangle's own" },
+    CounterDoc { name: "raster_footprints_walked_by_lane", doc: "with raster = compute: large footprints the list had no room for, walked by the triangle's own invocation (same light, slower)" },
     CounterDoc { name: "dropped_face_mismatch", doc: "older results only (now dropped_path_mismatch): triangles dropped because their vertices met different sides of the generator (a ring's outer and inner walls)" },
     CounterDoc { name: "vertices_landed", doc: "vertices whose ray reached a diffuse receiver along its sheet's path" },
     CounterDoc { name: "vertices_landed_after_rehit", doc: "those of vertices_landed whose path met an object it had already left again on the way (a mirror ring's opposite wall; only with bounces > 0)" },
@@ -289,11 +331,174 @@ struct Sheet {
     bytes: u64,
 }
 
+/// How the kept triangles reach the surface caustic.
+enum SplatDraw {
+    /// Drawn with additive blending (Wallace's).
+    Hardware(RasterPass),
+    /// Added into a fixed-point accumulator by compute kernels, then resolved (boxed:
+    /// its passes and buffers are the bigger variant, made once per scene).
+    Compute(Box<ComputeSplat>),
+}
+
+/// The compute path's passes and buffers.
+struct ComputeSplat {
+    /// Kernels `splat`, `splat_large`, `next_sheet`; group 1 is each sheet's, group 2
+    /// the accumulator, the list and the counts.
+    pass: ComputePass,
+    /// The full-screen pass adding the accumulator into the surface caustic.
+    resolve: RasterPass,
+    /// `raster_counts`: cleared each frame, read by `counters`.
+    raster_counts: wgpu::Buffer,
+    _accumulator: wgpu::Buffer,
+    _large: wgpu::Buffer,
+    _memory: Reservation,
+}
+
+impl ComputeSplat {
+    fn new(
+        ctx: &GpuContext,
+        renderer: &Renderer,
+        params: &WavefrontParams,
+    ) -> Result<(Self, u64), MethodError> {
+        let camera = &renderer.scene().scene.camera;
+        let pixels = u64::from(camera.width) * u64::from(camera.height);
+        let accumulator_bytes = pixels * ACCUM_WORDS_PER_PIXEL * 4;
+        // Room for a large footprint per 64 pixels; past it the triangle's own
+        // invocation walks the footprint (same sums, `raster_footprints_walked_by_lane`).
+        let large_bytes = pixels.div_ceil(64).max(1024) * 4;
+        let what = format!(
+            "raster=compute: the fixed-point accumulator and the list of large footprints ({pixels} pixels x {} bytes + {large_bytes} bytes)",
+            ACCUM_WORDS_PER_PIXEL * 4
+        );
+        let lower = "render fewer pixels or use raster=hardware";
+        let param = |e: caustics_gpu::GpuError| MethodError::Param {
+            method: NAME,
+            message: e.to_string(),
+        };
+        ctx.limits
+            .storage(&what, accumulator_bytes, lower)
+            .map_err(param)?;
+        let memory = ctx
+            .memory
+            .reserve(&what, accumulator_bytes + large_bytes, lower)
+            .map_err(param)?;
+        let device = &ctx.device;
+        let (accumulator, large, raster_counts) = ctx.checked("wavefront compute splat", || {
+            let buffer = |label: &str, size: u64, usage: wgpu::BufferUsages| {
+                device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some(label),
+                    size,
+                    usage: wgpu::BufferUsages::STORAGE | usage,
+                    mapped_at_creation: false,
+                })
+            };
+            (
+                // Zero at creation; each resolve zeroes what it read.
+                buffer(
+                    "wavefront compute accumulator",
+                    accumulator_bytes,
+                    wgpu::BufferUsages::empty(),
+                ),
+                buffer(
+                    "wavefront large footprints",
+                    large_bytes,
+                    wgpu::BufferUsages::empty(),
+                ),
+                buffer(
+                    "wavefront raster counts",
+                    RASTER_COUNTS_BYTES,
+                    wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
+                ),
+            )
+        })?;
+        let shader = Shader::new(ctx, "wavefront splat_compute.wgsl", splat_compute_source())?;
+        let pass = ComputePass::builder(ctx, "wavefront/splat", &shader)
+            .frame(renderer)
+            .caller_group(1)
+            .bind(
+                2,
+                &[
+                    ("accum", &accumulator),
+                    ("large", &large),
+                    ("raster_counts", &raster_counts),
+                ],
+            )
+            .kernels(&["splat", "splat_large", "next_sheet"])
+            .constants(&[("small_pixels", f64::from(params.raster_small_footprint))])
+            .build()?;
+        let shader = Shader::new(ctx, "wavefront resolve.wgsl", resolve_source())?;
+        let resolve = RasterPass::fullscreen(
+            ctx,
+            "wavefront/resolve",
+            &shader,
+            "fs_resolve",
+            &[Some(additive_hdr_target())],
+        )
+        .frame(renderer)
+        .bind(1, &[("accum", &accumulator)])
+        .build()?;
+        let bytes = accumulator.size() + large.size() + raster_counts.size();
+        Ok((
+            Self {
+                pass,
+                resolve,
+                raster_counts,
+                _accumulator: accumulator,
+                _large: large,
+                _memory: memory,
+            },
+            bytes,
+        ))
+    }
+
+    /// Every sheet's kept triangles into the accumulator, then into the surface caustic.
+    fn record(&self, frame: &mut Frame<'_>, sheets: &[Sheet]) -> Result<(), MethodError> {
+        frame.encoder.clear_buffer(&self.raster_counts, 0, None);
+        {
+            let mut pass = self.pass.begin(frame)?;
+            for sheet in sheets {
+                pass.set_bind_group(1, &sheet.splat_group, &[]);
+                pass.dispatch(
+                    "splat",
+                    groups_2d(u64::from(sheet.triangle_count).div_ceil(64)),
+                )?;
+                pass.dispatch("splat_large", [LARGE_WORKGROUPS, 1, 1])?;
+                pass.dispatch("next_sheet", [1, 1, 1])?;
+            }
+        }
+        let renderer = frame.renderer;
+        let attachments = [load_attachment(&renderer.targets().surface.view)];
+        self.resolve
+            .begin(frame, &attachments, None)?
+            .draw_fullscreen();
+        Ok(())
+    }
+
+    /// `raster_pixels_covered`, `raster_large_footprints`,
+    /// `raster_footprints_walked_by_lane`.
+    fn counters(&self, ctx: &GpuContext, out: &mut Counters) -> Result<(), MethodError> {
+        let w = caustics_gpu::readback::read_buffer_u32(
+            ctx,
+            &self.raster_counts,
+            RASTER_COUNTS_BYTES,
+            "wavefront raster counts",
+        )?;
+        out.insert(
+            "raster_pixels_covered".into(),
+            u64::from(w[4]) | (u64::from(w[5]) << 32),
+        );
+        out.insert("raster_large_footprints".into(), u64::from(w[1]));
+        out.insert("raster_footprints_walked_by_lane".into(), u64::from(w[2]));
+        Ok(())
+    }
+}
+
 /// `wavefront` bound to one scene.
 pub struct Wavefront {
     trace: ComputePass,
     classify: ComputePass,
-    splat: RasterPass,
+    /// The kept triangles into the surface caustic, on the hardware or compute path.
+    splat: SplatDraw,
     /// With `splat_orphans`: the landed vertices of dropped triangles, as points.
     orphans: Option<RasterPass>,
     sheets: Vec<Sheet>,
@@ -345,14 +550,24 @@ impl Wavefront {
             .caller_group(1)
             .kernels(&["classify_triangles"])
             .build()?;
-        // Folded triangles face away: both windings count (the builder culls nothing).
-        let shader = Shader::new(ctx, "wavefront splat.wgsl", draw_source(SPLAT_WGSL))?;
-        let splat = RasterPass::builder(ctx, "wavefront/splat", &shader, "vs_splat")
-            .frame(renderer)
-            .caller_group(1)
-            .fragment("fs_splat", &[Some(additive_hdr_target())])
-            .counted()
-            .build()?;
+        let (splat, compute_bytes) = match params.raster {
+            Raster::Hardware => {
+                // Folded triangles face away: both windings count (the builder culls
+                // nothing).
+                let shader = Shader::new(ctx, "wavefront splat.wgsl", draw_source(SPLAT_WGSL))?;
+                let pass = RasterPass::builder(ctx, "wavefront/splat", &shader, "vs_splat")
+                    .frame(renderer)
+                    .caller_group(1)
+                    .fragment("fs_splat", &[Some(additive_hdr_target())])
+                    .counted()
+                    .build()?;
+                (SplatDraw::Hardware(pass), 0)
+            }
+            Raster::Compute => {
+                let (compute, bytes) = ComputeSplat::new(ctx, renderer, params)?;
+                (SplatDraw::Compute(Box::new(compute)), bytes)
+            }
+        };
         let orphans = if params.splat_orphans {
             let shader = Shader::new(ctx, "wavefront orphans.wgsl", draw_source(ORPHANS_WGSL))?;
             Some(
@@ -370,7 +585,10 @@ impl Wavefront {
         let (trace_schema, classify_schema, splat_schema) = (
             trace.caller_schema(1)?,
             classify.caller_schema(1)?,
-            splat.caller_schema(1)?,
+            match &splat {
+                SplatDraw::Hardware(pass) => pass.caller_schema(1)?,
+                SplatDraw::Compute(compute) => compute.pass.caller_schema(1)?,
+            },
         );
         let orphan_schema = match &orphans {
             Some(pass) => Some(pass.caller_schema(1)?),
@@ -508,7 +726,8 @@ impl Wavefront {
             + triangle_counts.size()
             + vertex_counts.size()
             + counters_init.size()
-            + bvh.bytes;
+            + bvh.bytes
+            + compute_bytes;
         Ok(Self {
             trace,
             classify,
@@ -670,12 +889,15 @@ impl CausticsMethod for Wavefront {
         }
 
         let attachments = [load_attachment(&renderer.targets().surface.view)];
-        {
-            let mut pass = self.splat.begin(frame, &attachments, None)?;
-            for sheet in &self.sheets {
-                pass.set_bind_group(1, &sheet.splat_group, &[]);
-                pass.draw(0..3 * sheet.triangle_count, 0..1);
+        match &self.splat {
+            SplatDraw::Hardware(splat) => {
+                let mut pass = splat.begin(frame, &attachments, None)?;
+                for sheet in &self.sheets {
+                    pass.set_bind_group(1, &sheet.splat_group, &[]);
+                    pass.draw(0..3 * sheet.triangle_count, 0..1);
+                }
             }
+            SplatDraw::Compute(compute) => compute.record(frame, &self.sheets)?,
         }
         if let Some(orphans) = &self.orphans {
             let mut pass = orphans.begin(frame, &attachments, None)?;
@@ -718,6 +940,11 @@ impl CausticsMethod for Wavefront {
         for (name, value) in VERTEX_COUNTERS.iter().zip(&vertices) {
             out.insert((*name).into(), *value as u64);
         }
+        // The compute splat's work only where it runs (the hardware path's is its splat
+        // pass's fragments).
+        if let SplatDraw::Compute(compute) = &self.splat {
+            compute.counters(ctx, &mut out)?;
+        }
         Ok(out)
     }
 
@@ -736,17 +963,37 @@ mod tests {
         shader::validate_wgsl("trace.wgsl", &trace_source())?;
         shader::validate_wgsl("classify.wgsl", &pass_source(CLASSIFY_WGSL))?;
         shader::validate_wgsl("splat.wgsl", &draw_source(SPLAT_WGSL))?;
-        shader::validate_wgsl("orphans.wgsl", &draw_source(ORPHANS_WGSL))
+        shader::validate_wgsl("orphans.wgsl", &draw_source(ORPHANS_WGSL))?;
+        shader::validate_wgsl("splat_compute.wgsl", &splat_compute_source())?;
+        shader::validate_wgsl("resolve.wgsl", &resolve_source())
+    }
+
+    #[test]
+    fn accumulator_words_match_the_wgsl() {
+        for source in [splat_compute_source(), resolve_source()] {
+            assert_eq!(
+                caustics_gpu::layout::wgsl_u32_constant(&source, "ACCUM_WORDS").ok(),
+                Some(ACCUM_WORDS_PER_PIXEL as u32)
+            );
+        }
     }
 
     /// Every counter `Wavefront::counters` reports has a doc.
     #[test]
     fn every_counter_is_documented() {
-        let names: Vec<&str> = ["sheets", "source_vertices", "triangles", "bvh_triangles"]
-            .into_iter()
-            .chain(TRIANGLE_COUNTERS)
-            .chain(VERTEX_COUNTERS)
-            .collect();
+        let names: Vec<&str> = [
+            "sheets",
+            "source_vertices",
+            "triangles",
+            "bvh_triangles",
+            "raster_pixels_covered",
+            "raster_large_footprints",
+            "raster_footprints_walked_by_lane",
+        ]
+        .into_iter()
+        .chain(TRIANGLE_COUNTERS)
+        .chain(VERTEX_COUNTERS)
+        .collect();
         // `dropped_face_mismatch` is documented for older result files only.
         let current: Vec<_> = COUNTER_DOCS
             .iter()
@@ -824,6 +1071,11 @@ mod tests {
             (serde_json::json!({"tolerance": -1.0}), "tolerance"),
             (serde_json::json!({"tolerance": 1e308}), "tolerance"),
             (serde_json::json!({"bounces": 9}), "bounces"),
+            (serde_json::json!({"raster": "gpu"}), "raster"),
+            (
+                serde_json::json!({"raster_small_footprint": 9000}),
+                "raster_small_footprint",
+            ),
             (serde_json::json!({"grd": 4}), "known parameters"),
         ] {
             let msg = parse::<WavefrontParams>(NAME, &json)
@@ -834,7 +1086,7 @@ mod tests {
         use caustics_method::MethodParams;
         assert_eq!(
             serde_json::Value::Object(WavefrontParams::default().to_json()),
-            serde_json::json!({"grid": 512, "tolerance": 2e-3, "bounces": 0, "reflections": false, "splat_orphans": false})
+            serde_json::json!({"grid": 512, "tolerance": 2e-3, "bounces": 0, "reflections": false, "splat_orphans": false, "raster": "hardware", "raster_small_footprint": 256})
         );
     }
 }

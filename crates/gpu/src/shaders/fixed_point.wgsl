@@ -31,8 +31,16 @@ fn add_fixed(w: u32, v: f32) {
 }
 
 // The number at words `w`, `w + 1` as f32, leaving zero behind for the next frame.
+// Called by a resolve dispatched after every addition (no invocation adds meanwhile),
+// so loads and stores suffice, and an untouched channel (most of a sparse caustic's) is
+// only read.
 fn take_fixed(w: u32) -> f32 {
-    let low = atomicExchange(&accum[w], 0u);
-    let high = atomicExchange(&accum[w + 1u], 0u);
+    let low = atomicLoad(&accum[w]);
+    let high = atomicLoad(&accum[w + 1u]);
+    if low == 0u && high == 0u {
+        return 0.0;
+    }
+    atomicStore(&accum[w], 0u);
+    atomicStore(&accum[w + 1u], 0u);
     return (f32(high) * 4294967296.0 + f32(low)) * exp2(-FIXED_FRAC_BITS);
 }
