@@ -29,8 +29,8 @@
 //!
 //! `raster=compute` (issue 17) replaces passes 4 and 5 by one compute pass of the name
 //! `triangles` (`triangles_compute.wgsl`): each triangle's invocation finds the texels
-//! of each face whose centres it covers with homogeneous edge functions (Olano & Greer
-//! 1997), interpolates as the rasterizer does and adds fs_triangle's value into a
+//! of each face whose centres it covers with edge functions (caustics-gpu's
+//! triangle_raster.wgsl, shared with wavefront), interpolates as the rasterizer does and adds fs_triangle's value into a
 //! fixed-point accumulator with integer atomics (footprints over
 //! `raster_small_footprint` are walked by whole workgroups); the orphans' splats go into
 //! the same accumulator, which a last dispatch resolves into the cube map. The map is
@@ -139,7 +139,7 @@ method_params! {
         vertex_area: VertexArea = VertexArea::Fan;
         /// splat the hits none of whose triangles is kept as one cube-map texel each, so their light is not lost (paper: false)
         splat_orphans: bool = false;
-        /// how the triangles reach the cube map: hardware (drawn, additive blending: the paper's) or compute (compute kernels find each triangle's covered texels with homogeneous edge functions and add them into a fixed-point accumulator with integer atomics, then resolved: the same image on every run)
+        /// how the triangles reach the cube map: hardware (drawn, additive blending: the paper's) or compute (compute kernels find each triangle's covered texels with edge functions and add them into a fixed-point accumulator with integer atomics, then resolved: the same image on every run)
         raster: Raster = Raster::Hardware;
         // At most 8192: an invocation walks up to six such footprints (a triangle on
         // every face), under llvmpipe's 65,535 loop iterations per invocation.

@@ -6,8 +6,8 @@
 // Same texels, same values as triangles.wgsl: a triangle covers the texels of a face
 // whose centres its projection from the centre contains, with the rasterizer's
 // perspective-correct barycentrics there (caustics-gpu's triangle_raster.wgsl: edge
-// functions in 2D homogeneous coordinates, no clipping, ties on a shared edge to one
-// of its two triangles).
+// functions of the projected vertices, homogeneous ones for a triangle with a vertex
+// behind the centre, ties on a shared edge to one of its two triangles).
 //
 // Small triangles, large footprints: `rasterize` gives each triangle one invocation,
 // which walks its bounding rectangle on each face it reaches, up to `small_texels`

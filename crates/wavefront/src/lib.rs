@@ -41,7 +41,7 @@
 //!
 //! `raster=compute` (issue 17) replaces the raster splat by a compute pass of the same
 //! name (`splat_compute.wgsl`): each kept triangle's invocation finds the pixels whose
-//! centres it covers with homogeneous edge functions (Olano & Greer 1997), makes the
+//! centres it covers with edge functions (caustics-gpu's triangle_raster.wgsl), makes the
 //! fragment shader's tests there and adds its radiance into a camera-sized fixed-point
 //! accumulator with integer atomics (footprints over `raster_small_footprint` pixels
 //! are walked by whole workgroups); a full-screen `resolve` adds the sums into the
@@ -141,7 +141,7 @@ method_params! {
         /// landed vertex, a third of the triangle's flux each (Wallace: false, that light
         /// is lost)
         splat_orphans: bool = false;
-        /// how the kept triangles reach the image: hardware (drawn, additive blending: Wallace's) or compute (compute kernels find each triangle's covered pixels with homogeneous edge functions and add them into a fixed-point accumulator with integer atomics, then resolved: the same image on every run)
+        /// how the kept triangles reach the image: hardware (drawn, additive blending: Wallace's) or compute (compute kernels find each triangle's covered pixels with edge functions and add them into a fixed-point accumulator with integer atomics, then resolved: the same image on every run)
         raster: Raster = Raster::Hardware;
         // At most 8192: under llvmpipe's 65,535 loop iterations per invocation.
         /// with raster = compute: a triangle's footprint (its bounding rectangle) of up to this many pixels is walked by the triangle's own invocation, a larger one by a workgroup of 64
