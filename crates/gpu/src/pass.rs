@@ -957,6 +957,7 @@ pub struct RasterSpec<'a> {
     primitive: wgpu::PrimitiveState,
     depth_stencil: Option<wgpu::DepthStencilState>,
     counted: bool,
+    constants: Vec<(&'a str, f64)>,
 }
 
 /// Declares a [`RasterPass`].
@@ -986,6 +987,7 @@ impl RasterPass {
                 },
                 depth_stencil: None,
                 counted: false,
+                constants: Vec::new(),
             },
         )
     }
@@ -1106,6 +1108,14 @@ impl<'a> RasterPassBuilder<'a> {
         self
     }
 
+    /// Pipeline-overridable constants of both stages: a shader specialized at build
+    /// time, e.g. on a mode that a uniform would otherwise branch on per fragment
+    /// (lavapipe executes both sides of a uniform branch under a mask).
+    pub fn constants(mut self, constants: &[(&'a str, f64)]) -> Self {
+        self.spec.constants.extend_from_slice(constants);
+        self
+    }
+
     /// Creates the layouts, bind groups and pipeline(s) (inside a wgpu error scope).
     pub fn build(self) -> Result<RasterPass, GpuError> {
         let shader = self.groups.shader;
@@ -1136,6 +1146,7 @@ impl<'a> RasterPassBuilder<'a> {
             primitive,
             depth_stencil,
             counted,
+            constants: own_constants,
         } = self.spec;
         let blended = targets
             .iter()
@@ -1146,7 +1157,9 @@ impl<'a> RasterPassBuilder<'a> {
         let (pass, compiled) = self.ctx.checked(&format!("pass {name}"), || {
             let built = groups.build(&name)?;
             let mut compiled = Vec::new();
-            let mut pipeline = |constants: &[(&str, f64)]| {
+            let mut pipeline = |fill: &[(&str, f64)]| {
+                let constants: Vec<(&str, f64)> =
+                    fill.iter().chain(&own_constants).copied().collect();
                 let key = PipelineKey {
                     source: shader.source.clone(),
                     descriptor: format!(
@@ -1163,7 +1176,10 @@ impl<'a> RasterPassBuilder<'a> {
                     vertex: wgpu::VertexState {
                         module: &shader.module,
                         entry_point: Some(vertex),
-                        compilation_options: Default::default(),
+                        compilation_options: wgpu::PipelineCompilationOptions {
+                            constants: &constants,
+                            ..Default::default()
+                        },
                         buffers: vertex_buffers,
                     },
                     primitive,
@@ -1173,7 +1189,7 @@ impl<'a> RasterPassBuilder<'a> {
                         module: &shader.module,
                         entry_point: Some(entry),
                         compilation_options: wgpu::PipelineCompilationOptions {
-                            constants,
+                            constants: &constants,
                             ..Default::default()
                         },
                         targets: &targets,

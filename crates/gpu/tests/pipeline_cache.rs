@@ -3,8 +3,9 @@
 //! that changes the pipeline (constants, source) compiles anew. On whatever adapter the
 //! machine has (lavapipe on CI; without one these fail with the install hint).
 
-use caustics_gpu::pass::{ComputePass, Shader};
-use caustics_gpu::readback::read_buffer_bytes;
+use caustics_gpu::pass::{ComputePass, RasterPass, Shader};
+use caustics_gpu::readback::{read_buffer_bytes, read_rgba32f};
+use caustics_gpu::textures::opaque_target;
 use caustics_gpu::wgpu::{self, util::DeviceExt};
 use caustics_gpu::{
     AdapterChoice, FrameMode, GpuContext, GpuScene, PassProfiler, PipelineStats, Renderer,
@@ -149,6 +150,115 @@ fn a_pass_built_again_reuses_its_pipeline_with_its_own_bind_groups() {
             reused: 0
         }
     );
+}
+
+/// A full-screen triangle whose vertex stage passes on one constant and whose fragment
+/// stage writes it beside another: neither has a default, so a pass whose constants
+/// did not reach both stages would fail to build.
+const RASTER_WGSL: &str = r#"
+override VERTEX_VALUE: f32;
+override FRAGMENT_VALUE: f32;
+struct Out {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) @interpolate(flat) from_vertex: f32,
+}
+@vertex
+fn vs(@builtin(vertex_index) vi: u32) -> Out {
+    let uv = vec2<f32>(f32((vi << 1u) & 2u), f32(vi & 2u));
+    return Out(vec4<f32>(uv * 2.0 - 1.0, 0.0, 1.0), VERTEX_VALUE);
+}
+@fragment
+fn fs(in: Out) -> @location(0) vec4<f32> {
+    return vec4<f32>(in.from_vertex, FRAGMENT_VALUE, 0.0, 1.0);
+}
+"#;
+
+/// Builds the raster pass with `constants`, draws it over a 4x4 target and returns
+/// the first texel's (red, green) and what the build compiled or reused.
+fn draw_specialized(
+    ctx: &GpuContext,
+    renderer: &Renderer,
+    constants: &[(&str, f64)],
+) -> ((f32, f32), PipelineStats) {
+    let before = ctx.pipeline_stats();
+    let shader = Shader::new(
+        ctx,
+        "raster cache test",
+        shader::compose_method(RASTER_WGSL),
+    )
+    .expect("shader");
+    let pass = RasterPass::builder(ctx, "test/specialized", &shader, "vs")
+        .frame(renderer)
+        .fragment("fs", &[opaque_target(wgpu::TextureFormat::Rgba32Float)])
+        .constants(constants)
+        .build()
+        .expect("pass");
+    let built = ctx.pipeline_stats().since(before);
+    let target = ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("specialized target"),
+        size: wgpu::Extent3d {
+            width: 4,
+            height: 4,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::Rgba32Float,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+        view_formats: &[],
+    });
+    let view = target.create_view(&Default::default());
+    let mut profiler = PassProfiler::new(ctx, 1);
+    let mut frame = renderer
+        .begin_frame(&mut profiler, FrameMode::Timed)
+        .expect("frame");
+    {
+        let attachments = [Some(wgpu::RenderPassColorAttachment {
+            view: &view,
+            depth_slice: None,
+            resolve_target: None,
+            ops: wgpu::Operations {
+                load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                store: wgpu::StoreOp::Store,
+            },
+        })];
+        let mut rp = pass.begin(&mut frame, &attachments, None).expect("pass");
+        rp.draw(0..3, 0..1);
+    }
+    frame.submit(ctx).expect("submit");
+    let texels = read_rgba32f(ctx, &target, "specialized target").expect("read target");
+    assert!(
+        texels.chunks(4).all(|t| t == &texels[..4]),
+        "the full-screen triangle covers the target evenly: {texels:?}"
+    );
+    ((texels[0], texels[1]), built)
+}
+
+#[test]
+fn a_raster_pass_is_specialized_in_both_stages_and_each_specialization_compiled_once() {
+    let ctx =
+        GpuContext::new(&AdapterChoice::from_flag_or_env(None)).unwrap_or_else(|e| panic!("{e}"));
+    let renderer = renderer(&ctx);
+    let a = [("VERTEX_VALUE", 0.25), ("FRAGMENT_VALUE", 0.5)];
+    let b = [("VERTEX_VALUE", 2.0), ("FRAGMENT_VALUE", -3.0)];
+    let compiled = PipelineStats {
+        compiled: 1,
+        reused: 0,
+    };
+    let reused = PipelineStats {
+        compiled: 0,
+        reused: 1,
+    };
+    assert_eq!(
+        draw_specialized(&ctx, &renderer, &a),
+        ((0.25, 0.5), compiled)
+    );
+    assert_eq!(
+        draw_specialized(&ctx, &renderer, &b),
+        ((2.0, -3.0), compiled)
+    );
+    assert_eq!(draw_specialized(&ctx, &renderer, &a), ((0.25, 0.5), reused));
 }
 
 #[test]

@@ -111,7 +111,7 @@ fn trace_path(mode: u32, light: GpuLight, din: vec3<f32>, o: vec3<f32>, n: vec3<
 // direction to that point (FILTER_FULL, the paper's finite differences) or with the
 // centre's direction and origin (FILTER_CURVATURE: the normal's change alone).
 fn neighbour_lookup(mode: u32, light: GpuLight, x: vec3<f32>, din: vec3<f32>, p: vec3<f32>, offset: vec3<f32>, nn: vec3<f32>, eta: f32) -> vec4<f32> {
-    if params.filtering == FILTER_FULL {
+    if PINHOLE_FILTERING == FILTER_FULL {
         let q = p + offset;
         return trace_path(mode, light, normalize(q - x), q, nn, eta).lookup;
     }
@@ -147,7 +147,7 @@ fn sample_irradiance(i: u32, mode: u32, light: GpuLight, x: vec3<f32>, nx: vec3<
         let sl = sample_light[i];
         side = sl.w;
         radiance = sl.xyz;
-        if params.environment == 1u {
+        if PINHOLE_ENVIRONMENT {
             // The sky is on every side: through a mirror (or a Fresnel reflection) the
             // light a receiver gets comes from the receiver's side, through an open
             // surface from the other.
@@ -180,7 +180,13 @@ fn sample_irradiance(i: u32, mode: u32, light: GpuLight, x: vec3<f32>, nx: vec3<
     if path.lookup.w == 0.0 {
         return vec4<f32>(0.0);
     }
-    let environment = params.environment == 1u;
+    let environment = PINHOLE_ENVIRONMENT;
+    // Off the map's one face no footprint can reach the light (filtered_coverage), so
+    // neither the light's visibility nor the four neighbour paths of the filter are
+    // traced for it. (An environment's map covers every direction.)
+    if !environment && !on_light_face(path.lookup.xyz) {
+        return vec4<f32>(0.0);
+    }
     if mode == MODE_SPHERE_REFRACT && environment {
         // The sky's visibility along the exit direction is traced below.
         radiance = vec3<f32>(path.transmit);
@@ -189,15 +195,9 @@ fn sample_irradiance(i: u32, mode: u32, light: GpuLight, x: vec3<f32>, nx: vec3<
     } else {
         radiance *= path.transmit;
     }
-    // Off the map's one face no footprint can reach the light (filtered_coverage), so
-    // the four neighbour paths of the filter are not traced for it. (An environment's
-    // map covers every direction.)
-    if !environment && !on_light_face(path.lookup.xyz) {
-        return vec4<f32>(0.0);
-    }
     var gx = vec3<f32>(0.0);
     var gy = vec3<f32>(0.0);
-    if params.filtering != FILTER_OFF {
+    if PINHOLE_FILTERING != FILTER_OFF {
         let r = s.extra.x;
         let t1 = s.t1.xyz;
         let t2 = s.t2.xyz;
@@ -265,11 +265,11 @@ fn fs_gather(in: VsOut) -> @location(0) vec4<f32> {
     let last = min(first + params.batch_size, params.sample_count);
     // A dielectric's Fresnel reflection (`reflections`) is a second pinhole image per
     // sample: the sample as a mirror of reflectance F.
-    let reflect_too = params.reflections == 1u && params.mode != MODE_MIRROR;
+    let reflect_too = PINHOLE_REFLECTIONS && PINHOLE_MODE != MODE_MIRROR;
     var irradiance = vec3<f32>(0.0);
     var fetches = 0u;
     for (var i = first; i < last; i++) {
-        let c = sample_irradiance(i, params.mode, light, x, nx, x_start);
+        let c = sample_irradiance(i, PINHOLE_MODE, light, x, nx, x_start);
         irradiance += c.xyz;
         fetches += u32(c.w);
         if reflect_too {

@@ -124,6 +124,7 @@ pub enum Filtering {
 }
 
 impl Filtering {
+    /// `PINHOLE_FILTERING` of types.wgsl.
     fn code(self) -> u32 {
         match self {
             Filtering::Off => 0,
@@ -240,7 +241,7 @@ pub enum GeneratorMode {
 }
 
 impl GeneratorMode {
-    /// `mode` of `Params` in types.wgsl.
+    /// `PINHOLE_MODE` of types.wgsl.
     fn code(self) -> u32 {
         match self {
             GeneratorMode::Mirror => 0,
@@ -339,10 +340,6 @@ struct GpuParams {
     light_index: u32,
     sample_count: u32,
     batch_size: u32,
-    mode: u32,
-    filtering: u32,
-    reflections: u32,
-    environment: u32,
     map_center: [f32; 4],
     map_axis: [f32; 4],
     map_u: [f32; 4],
@@ -444,8 +441,9 @@ const COUNTER_DOCS: &[CounterDoc] = &[
 /// caustic: the maps' sum is the paper's one map, kept apart so each light's disc
 /// keeps the map's whole resolution.
 pub struct Pinhole {
-    prepare: ComputePass,
-    gather: RasterPass,
+    /// The passes of the scene's lights that are not environments, and of those that
+    /// are (each pair specialized on it; built for the kinds the scene has).
+    passes: [Option<Passes>; 2],
     /// One per scene light, in the scene's order.
     lights: Vec<PinholeLight>,
     counters: wgpu::Buffer,
@@ -458,8 +456,34 @@ pub struct Pinhole {
     _memory: Reservation,
 }
 
+/// Both passes, specialized for one kind of light ([`specialization`]).
+struct Passes {
+    prepare: ComputePass,
+    gather: RasterPass,
+}
+
+/// The pipeline-overridable constants of both passes (types.wgsl): what the gather's
+/// loop would otherwise branch on per fragment.
+fn specialization(
+    mode: GeneratorMode,
+    params: &PinholeParams,
+    environment: bool,
+) -> [(&'static str, f64); 4] {
+    [
+        ("PINHOLE_MODE", f64::from(mode.code())),
+        ("PINHOLE_FILTERING", f64::from(params.filtering.code())),
+        (
+            "PINHOLE_REFLECTIONS",
+            f64::from(u8::from(params.reflections)),
+        ),
+        ("PINHOLE_ENVIRONMENT", f64::from(u8::from(environment))),
+    ]
+}
+
 /// One light's map, what each sample sees of it, and its groups of both passes.
 struct PinholeLight {
+    /// Whether it is an environment light (which pair of [`Pinhole::passes`] it uses).
+    environment: bool,
     prepare_group: wgpu::BindGroup,
     gather_group: wgpu::BindGroup,
     /// The light map (in the device's memory ledger while the groups use it).
@@ -488,7 +512,6 @@ fn gpu_samples(samples: &[PointSample], epsilon_scale: f32) -> Vec<GpuSample> {
 fn gpu_params(
     params: &PinholeParams,
     generator: u32,
-    mode: u32,
     sample_count: u32,
     light_index: usize,
     disc: &LightDisc,
@@ -499,10 +522,6 @@ fn gpu_params(
         light_index: light_index as u32,
         sample_count,
         batch_size: params.samples_per_pass,
-        mode,
-        filtering: params.filtering.code(),
-        reflections: u32::from(params.reflections),
-        environment: 0,
         map_center: disc.center.extend(0.0).to_array(),
         map_axis: disc.axis.extend(disc.radius).to_array(),
         map_u: map_u.extend(0.0).to_array(),
@@ -637,45 +656,55 @@ impl Pinhole {
         let bvh_bindings: [(&str, &dyn caustics_gpu::pass::Bindable); 2] =
             [("bvh_nodes", &bvh.nodes), ("bvh_triangles", &bvh.triangles)];
         // Pass 1: the light's radiance seen from each sample (one-event generators).
-        let shader = Shader::new(ctx, "pinhole prepare.wgsl", pass_source(PREPARE_WGSL))?;
-        let prepare = ComputePass::builder(ctx, "pinhole/prepare_samples", &shader)
-            .frame(renderer)
-            .caller_group(1)
-            .bind(BVH_GROUP, &bvh_bindings)
-            .kernels(&["prepare_samples"])
-            .build()?;
-
+        let prepare_shader = Shader::new(ctx, "pinhole prepare.wgsl", pass_source(PREPARE_WGSL))?;
         // Pass 2: every receiver pixel gathers the light through every sample, one
         // full-screen instance per batch of samples, added into the surface target.
-        let shader = Shader::new(ctx, "pinhole gather.wgsl", pass_source(GATHER_WGSL))?;
-        let gather = RasterPass::builder(ctx, "pinhole/gather", &shader, "vs_gather")
-            .frame(renderer)
-            .caller_group(1)
-            .bind(BVH_GROUP, &bvh_bindings)
-            .fragment("fs_gather", &[Some(additive_hdr_target())])
-            .counted()
-            .build()?;
-        let (prepare_schema, gather_schema) = (prepare.caller_schema(1)?, gather.caller_schema(1)?);
+        let gather_shader = Shader::new(ctx, "pinhole gather.wgsl", pass_source(GATHER_WGSL))?;
+        // Both passes are specialized on the generator's mode, the filter, the
+        // reflections and the kind of light: one pair for the scene's environment lights,
+        // one for its other lights (the pipeline cache compiles each once per device).
+        let build_passes = |environment: bool| -> Result<Passes, MethodError> {
+            let constants = specialization(mode, params, environment);
+            let prepare = ComputePass::builder(ctx, "pinhole/prepare_samples", &prepare_shader)
+                .frame(renderer)
+                .caller_group(1)
+                .bind(BVH_GROUP, &bvh_bindings)
+                .kernels(&["prepare_samples"])
+                .constants(&constants)
+                .build()?;
+            let gather = RasterPass::builder(ctx, "pinhole/gather", &gather_shader, "vs_gather")
+                .frame(renderer)
+                .caller_group(1)
+                .bind(BVH_GROUP, &bvh_bindings)
+                .fragment("fs_gather", &[Some(additive_hdr_target())])
+                .constants(&constants)
+                .counted()
+                .build()?;
+            Ok(Passes { prepare, gather })
+        };
+        let mut passes: [Option<Passes>; 2] = [None, None];
 
         let mut bytes = buffers.bytes();
         let mut lights = Vec::with_capacity(scene.lights.len());
         for (index, light) in scene.lights.iter().enumerate() {
-            let disc = LightDisc::new(light, centre, params.light_angle as f32);
-            let mut gpu_params = gpu_params(
-                params,
-                generator as u32,
-                mode.code(),
-                sample_count,
-                index,
-                &disc,
+            let environment = matches!(light, Light::Environment { .. });
+            let slot = &mut passes[usize::from(environment)];
+            if slot.is_none() {
+                *slot = Some(build_passes(environment)?);
+            }
+            let variant = slot.as_ref().expect("built just above");
+            let (prepare_schema, gather_schema) = (
+                variant.prepare.caller_schema(1)?,
+                variant.gather.caller_schema(1)?,
             );
+            let disc = LightDisc::new(light, centre, params.light_angle as f32);
+            let mut gpu_params = gpu_params(params, generator as u32, sample_count, index, &disc);
             let (light_buffers, map) = ctx.checked("pinhole setup", || {
                 // The light's map: an environment's own lat-long map, else the +Z face
                 // of the light's cube map, each with its mip chain.
                 let map = match light {
                     Light::Environment { map, scale } => {
                         let (texture, peak) = LightMap::environment(ctx, map)?;
-                        gpu_params.environment = 1;
                         gpu_params.env_scale = (*scale * peak).extend(0.0).to_array();
                         texture
                     }
@@ -705,6 +734,7 @@ impl Pinhole {
             )?;
             bytes += light_buffers.bytes() + map.bytes;
             lights.push(PinholeLight {
+                environment,
                 prepare_group,
                 gather_group,
                 _map: map,
@@ -713,8 +743,7 @@ impl Pinhole {
 
         let cam = &scene.camera;
         Ok(Self {
-            prepare,
-            gather,
+            passes,
             lights,
             bytes,
             _memory: samples_memory,
@@ -730,18 +759,29 @@ impl CausticsMethod for Pinhole {
     fn record(&mut self, frame: &mut Frame<'_>) -> Result<(), MethodError> {
         let renderer = frame.renderer;
         frame.encoder.clear_buffer(&self.counters, 0, None);
-        {
-            let mut pass = self.prepare.begin(frame)?;
-            for light in &self.lights {
+        let variants = || {
+            self.passes
+                .iter()
+                .zip([false, true])
+                .filter_map(|(p, env)| {
+                    let lights = self.lights.iter().filter(move |l| l.environment == env);
+                    p.as_ref().map(|p| (p, lights))
+                })
+        };
+        for (passes, lights) in variants() {
+            let mut pass = passes.prepare.begin(frame)?;
+            for light in lights {
                 pass.set_bind_group(1, &light.prepare_group, &[]);
                 pass.dispatch("prepare_samples", [self.sample_count.div_ceil(64), 1, 1])?;
             }
         }
         let attachments = [load_attachment(&renderer.targets().surface.view)];
-        let mut pass = self.gather.begin(frame, &attachments, None)?;
-        for light in &self.lights {
-            pass.set_bind_group(1, &light.gather_group, &[]);
-            pass.draw(0..3, 0..self.batches);
+        for (passes, lights) in variants() {
+            let mut pass = passes.gather.begin(frame, &attachments, None)?;
+            for light in lights {
+                pass.set_bind_group(1, &light.gather_group, &[]);
+                pass.draw(0..3, 0..self.batches);
+            }
         }
         Ok(())
     }
@@ -795,10 +835,6 @@ mod tests {
                 light_index,
                 sample_count,
                 batch_size,
-                mode,
-                filtering,
-                reflections,
-                environment,
                 map_center,
                 map_axis,
                 map_u,

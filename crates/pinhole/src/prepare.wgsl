@@ -20,7 +20,7 @@ fn prepare_samples(@builtin(global_invocation_id) gid: vec3<u32>) {
     let s = samples[i];
     // An environment lights every side, and its visibility depends on the direction a
     // receiver looks up (the gather traces it).
-    if params.environment == 1u {
+    if PINHOLE_ENVIRONMENT {
         sample_light[i] = vec4<f32>(1.0, 1.0, 1.0, 1.0);
         return;
     }

@@ -20,16 +20,6 @@ struct Params {
     light_index: u32,
     sample_count: u32,
     batch_size: u32,
-    // 0: mirror (one reflection), 1: dielectric sphere (refracted in and out),
-    // 2: open dielectric surface (one refraction: water, a glass quad).
-    mode: u32,
-    // 0: off, 1: curvature only, 2: full footprint (curvature and parallax, the paper).
-    filtering: u32,
-    // 1: also the Fresnel reflection off a dielectric generator (`reflections`).
-    reflections: u32,
-    // 1: the light is an environment: light_map holds its lat-long radiance (divided by
-    // its peak), env_scale its scale times that peak; the lookup is a direction.
-    environment: u32,
     // xyz: centre c of the cube map (point/spot: the generator's centre); w: unused.
     map_center: vec4<f32>,
     // xyz: axis of the light's disc in the map; w: disc radius rho (m, point/spot) or
@@ -44,6 +34,22 @@ struct Params {
     // xyz: what an environment map's texels are multiplied by (its scale × peak).
     env_scale: vec4<f32>,
 }
+
+// What a pass is specialized on (pipeline-overridable constants, set per light when
+// the passes are built, `Specialization` in lib.rs): a uniform would leave the choice to
+// every fragment of the gather's loop, and lavapipe runs both sides of a branch on a
+// uniform under a mask (the gather took 2.4x as long). No defaults: a pass built without
+// them fails to build.
+// 0: mirror (one reflection), 1: dielectric sphere (refracted in and out),
+// 2: open dielectric surface (one refraction: water, a glass quad).
+override PINHOLE_MODE: u32;
+// 0: off, 1: curvature only, 2: full footprint (curvature and parallax, the paper).
+override PINHOLE_FILTERING: u32;
+// Also the Fresnel reflection off a dielectric generator (`reflections`).
+override PINHOLE_REFLECTIONS: bool;
+// The light is an environment: light_map holds its lat-long radiance (divided by its
+// peak), env_scale its scale times that peak; the lookup is a direction.
+override PINHOLE_ENVIRONMENT: bool;
 
 const MODE_MIRROR: u32 = 0u;
 const MODE_SPHERE_REFRACT: u32 = 1u;
