@@ -598,3 +598,26 @@ fn pinhole_lights_add_up() {
         ],
     );
 }
+
+/// A sun and a sky in one scene take both specializations of the passes (one
+/// prepare/gather pair for the environment, one for the other lights): the ball under
+/// both renders the sum of the ball under each alone, counters summed.
+#[test]
+fn a_sun_and_a_sky_add_up() {
+    use caustics_testing::lights::{TWO_SUNS, adds_up, balls_under};
+    let sun = serde_json::json!({"type": "directional", "direction": TWO_SUNS[0], "irradiance": [1, 1, 1]});
+    let sky = serde_json::json!({"type": "environment", "path": "extended/sky_with_sun.exr"});
+    adds_up(
+        &caustics_method::registry_entry::<pinhole::Pinhole>(),
+        &serde_json::json!({"samples": 200, "cube_size": 64}),
+        "a sun and a sky",
+        balls_under(&[0.0], &[sun.clone(), sky.clone()]),
+        [balls_under(&[0.0], &[sun]), balls_under(&[0.0], &[sky])],
+        &[
+            "passes",
+            "sample_pixel_pairs",
+            "visibility_tests",
+            "texture_fetches",
+        ],
+    );
+}

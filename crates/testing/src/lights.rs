@@ -21,20 +21,26 @@ pub fn render(info: &MethodInfo, scene: Scene, params: serde_json::Value) -> (Hd
 /// Glass balls at `x` (each 0.5 m, 1 m above a floor) under directional lights of
 /// `directions` (irradiance 1 each), seen at 64×48.
 pub fn balls_under_suns(x: &[f64], directions: &[[f64; 3]]) -> Scene {
-    let objects: Vec<serde_json::Value> = x
-        .iter()
-        .map(|x| serde_json::json!({"shape": {"type": "sphere", "center": [x, 1.0, 0], "radius": 0.5}, "material": "glass"}))
-        .chain([serde_json::json!({"shape": {"type": "quad", "center": [0, 0, 0], "normal": [0, 1, 0], "size": [12, 12]}, "material": "floor"})])
-        .collect();
     let lights: Vec<serde_json::Value> = directions
         .iter()
         .map(
             |d| serde_json::json!({"type": "directional", "direction": d, "irradiance": [1, 1, 1]}),
         )
         .collect();
+    balls_under(x, &lights)
+}
+
+/// Glass balls at `x` (each 0.5 m, 1 m above a floor) under `lights` (the scene
+/// format's JSON; a relative map path is read from `scenes/`), seen at 64×48.
+pub fn balls_under(x: &[f64], lights: &[serde_json::Value]) -> Scene {
+    let objects: Vec<serde_json::Value> = x
+        .iter()
+        .map(|x| serde_json::json!({"shape": {"type": "sphere", "center": [x, 1.0, 0], "radius": 0.5}, "material": "glass"}))
+        .chain([serde_json::json!({"shape": {"type": "quad", "center": [0, 0, 0], "normal": [0, 1, 0], "size": [12, 12]}, "material": "floor"})])
+        .collect();
     crate::scene(&serde_json::json!({
         "name": "balls_under_suns",
-        "description": "glass balls far apart under one or two suns",
+        "description": "glass balls far apart under one or two lights",
         "camera": {"eye": [0, 4, 5], "target": [0, 0, 0], "up": [0, 1, 0], "fov_y_deg": 60, "width": 64, "height": 48},
         "lights": lights,
         "materials": {
