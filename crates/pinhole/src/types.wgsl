@@ -35,11 +35,11 @@ struct Params {
     env_scale: vec4<f32>,
 }
 
-// What a pass is specialized on (pipeline-overridable constants, set per light when
-// the passes are built, `Specialization` in lib.rs): a uniform would leave the choice to
-// every fragment of the gather's loop, and lavapipe runs both sides of a branch on a
-// uniform under a mask (the gather took 2.4x as long). No defaults: a pass built without
-// them fails to build.
+// What both passes are specialized on (pipeline-overridable constants, set per kind of
+// light when the passes are built: `specialization` in lib.rs). As uniforms they left
+// the choice to every (pixel, sample) pair of the gather's loop, and lavapipe runs both
+// sides of a branch on a uniform under a mask: the gather took 2.4-6x as long. No
+// defaults, so a pass built without them fails to build.
 // 0: mirror (one reflection), 1: dielectric sphere (refracted in and out),
 // 2: open dielectric surface (one refraction: water, a glass quad).
 override PINHOLE_MODE: u32;
