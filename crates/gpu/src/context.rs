@@ -14,8 +14,11 @@ pub const REQUIRED_FEATURES: wgpu::Features = wgpu::Features::FLOAT32_BLENDABLE;
 
 /// Features used when present. Without them the matching figures are recorded as
 /// absent (never as 0): timestamps give per-pass GPU time, pipeline statistics give
-/// fragment-shader invocations and primitive counts per pass.
+/// fragment-shader invocations and primitive counts per pass. Timestamps inside passes
+/// let a compute pass's beginning be taken before its first dispatch on lavapipe
+/// ([`crate::profiling`]).
 pub const OPTIONAL_FEATURES: wgpu::Features = wgpu::Features::TIMESTAMP_QUERY
+    .union(wgpu::Features::TIMESTAMP_QUERY_INSIDE_PASSES)
     .union(wgpu::Features::PIPELINE_STATISTICS_QUERY)
     .union(wgpu::Features::INDIRECT_FIRST_INSTANCE);
 
@@ -298,6 +301,13 @@ impl GpuContext {
     /// Whether per-pass timestamps can be taken.
     pub fn has_timestamps(&self) -> bool {
         self.features.contains(wgpu::Features::TIMESTAMP_QUERY)
+    }
+
+    /// Whether a pass can write timestamps between its commands.
+    pub fn has_timestamps_inside_passes(&self) -> bool {
+        self.features.contains(
+            wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_PASSES,
+        )
     }
 
     /// Whether pipeline statistics (fragment invocations, primitives) can be taken.

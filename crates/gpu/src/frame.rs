@@ -298,6 +298,10 @@ fn open_compute_pass<'e>(
     if let Some(set) = stats {
         pass.begin_pipeline_statistics_query(set, index);
     }
+    // So that lavapipe takes the beginning before the first dispatch (profiling.rs).
+    if let Some(set) = profiler.flush_timestamp_set(mode) {
+        pass.write_timestamp(set, index);
+    }
     Ok(ProfiledComputePass {
         pass,
         statistics: stats.is_some(),
