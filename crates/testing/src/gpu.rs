@@ -290,6 +290,21 @@ impl Measured {
     /// Fragment-shader invocations of pass `name` in the count frame (pipeline
     /// statistics, summed over its recordings); `None` without statistics or pass.
     pub fn fragment_invocations(&self, name: &str) -> Option<u64> {
+        self.pass_statistic(name, |s| s.fragment_invocations)
+    }
+
+    /// Vertex-shader invocations of pass `name` in the count frame (pipeline
+    /// statistics, summed over its recordings): one per vertex a non-indexed draw
+    /// issues; `None` without statistics or pass.
+    pub fn vertex_invocations(&self, name: &str) -> Option<u64> {
+        self.pass_statistic(name, |s| s.vertex_invocations)
+    }
+
+    fn pass_statistic(
+        &self,
+        name: &str,
+        statistic: impl Fn(&caustics_gpu::profiling::PassStatistics) -> u64,
+    ) -> Option<u64> {
         let mut passes = self
             .count
             .passes
@@ -297,9 +312,7 @@ impl Measured {
             .filter(|p| p.name == name)
             .peekable();
         passes.peek()?;
-        passes
-            .map(|p| p.statistics.map(|s| s.fragment_invocations))
-            .sum()
+        passes.map(|p| p.statistics.as_ref().map(&statistic)).sum()
     }
 
     /// Fragment-shader invocations of the passes of `method` (named `<method>/...`) in

@@ -2,10 +2,13 @@
 //!
 //! The light is a wavefront mesh: each vertex is a light ray, each triangle the bundle
 //! of rays between its vertices. The rays are traced through the refractor to the
-//! receivers (`trace.wgsl`), triangles that stay on one path to one receiver are
-//! flagged (`classify.wgsl`; flags, not a compacted list, so that the draw order and
-//! with it the additive blend are the same every frame: the image is deterministic),
-//! and the refracted mesh is drawn from the camera with brightness = flux density ×
+//! receivers (`trace.wgsl`; the rays' first hits on the generator once per wavefront,
+//! then each sheet from there), triangles that stay on one path to one receiver are
+//! kept and listed (`classify.wgsl`: an ordered compaction, counts, scan, scatter, not
+//! an atomic append, so that the draw order and with it the additive blend are the
+//! same every frame and the image is deterministic; the draws are indirect, so the
+//! camera-side passes touch only what they draw), and the refracted mesh is drawn from
+//! the camera with brightness = flux density ×
 //! (area before)/(area after), the two areas taken from screen-space derivatives of
 //! the old and new positions (`splat.wgsl`). Flux density is the light's irradiance
 //! per unit area of the plane perpendicular to a directional light (or its intensity
@@ -73,6 +76,12 @@ const SPLAT_WGSL: &str = include_str!("splat.wgsl");
 const ORPHANS_WGSL: &str = include_str!("orphans.wgsl");
 const SPLAT_COMPUTE_WGSL: &str = include_str!("splat_compute.wgsl");
 const RESOLVE_WGSL: &str = include_str!("resolve.wgsl");
+
+/// Bytes of one source's `FirstHit` (trace.wgsl): five vec4<f32>.
+const FIRST_HIT_BYTES: u64 = 80;
+
+/// Triangles per chunk of classify.wgsl's ordered compaction (`CHUNK`, its workgroup).
+const CLASSIFY_CHUNK: u64 = 64;
 
 /// u32 words per pixel of the compute path's accumulator (`ACCUM_WORDS` in
 /// splat_compute.wgsl and resolve.wgsl): r, g, b, each a 64-bit fixed-point number.
@@ -328,6 +337,11 @@ struct Sheet {
     splat_group: wgpu::BindGroup,
     /// With `splat_orphans`: the orphans pass's group 1 (splat.wgsl's bindings).
     orphan_group: Option<wgpu::BindGroup>,
+    /// The splat's and the orphans' indirect draws, written by classify.wgsl.
+    draw_args: wgpu::Buffer,
+    /// The first sheet of its wavefront: its trace group finds the first hits the
+    /// wavefront's other sheets start from.
+    first_sheet: bool,
     bytes: u64,
 }
 
@@ -542,13 +556,14 @@ impl Wavefront {
                 2,
                 &[("bvh_nodes", &bvh.nodes), ("bvh_triangles", &bvh.triangles)],
             )
-            .kernels(&["trace_vertices"])
+            .kernels(&["find_first_hits", "trace_vertices"])
             .build()?;
         let shader = Shader::new(ctx, "wavefront classify.wgsl", pass_source(CLASSIFY_WGSL))?;
         let classify = ComputePass::builder(ctx, "wavefront/classify_triangles", &shader)
             .frame(renderer)
             .caller_group(1)
-            .kernels(&["classify_triangles"])
+            .kernels(&["classify_triangles", "scan_chunks", "scatter_chunks"])
+            .constants(&[("SPLAT_ORPHANS", f64::from(u8::from(params.splat_orphans)))])
             .build()?;
         let (splat, compute_bytes) = match params.raster {
             Raster::Hardware => {
@@ -661,7 +676,7 @@ impl Wavefront {
                     message: format!("grid: {e}"),
                 };
                 ctx.limits
-                    .storage(&what, source_count * 64, raise)
+                    .storage(&what, source_count * FIRST_HIT_BYTES.max(64), raise)
                     .map_err(limit)?;
                 // Held (summed with every live resource) while the wavefront lives.
                 memory.push(
@@ -669,13 +684,20 @@ impl Wavefront {
                         .reserve(
                             &what,
                             lattice_bytes_needed
-                                + masks.len() as u64 * (source_count * 64 + triangle_count * 4),
+                                + source_count * FIRST_HIT_BYTES
+                                + masks.len() as u64
+                                    * Sheet::bytes_needed(
+                                        source_count,
+                                        triangle_count,
+                                        params.splat_orphans,
+                                    ),
                             raise,
                         )
                         .map_err(limit)?,
                 );
-                // One upload of the lattice per (light, generator); its sheets share it.
-                let (sources, triangles) = ctx.checked("wavefront lattice", || {
+                // One upload of the lattice per (light, generator); its sheets share it,
+                // and the rays' first hits (trace.wgsl `find_first_hits`).
+                let (sources, triangles, first_hits) = ctx.checked("wavefront lattice", || {
                     let init = |label: &str, contents: &[u8]| {
                         device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                             label: Some(label),
@@ -686,10 +708,16 @@ impl Wavefront {
                     (
                         init("wavefront sources", bytemuck::cast_slice(&mesh.sources)),
                         init("wavefront triangles", bytemuck::cast_slice(&mesh.triangles)),
+                        device.create_buffer(&wgpu::BufferDescriptor {
+                            label: Some("wavefront first hits"),
+                            size: (source_count * FIRST_HIT_BYTES).max(FIRST_HIT_BYTES),
+                            usage: wgpu::BufferUsages::STORAGE,
+                            mapped_at_creation: false,
+                        }),
                     )
                 })?;
-                lattice_bytes += sources.size() + triangles.size();
-                for reflect_mask in masks {
+                lattice_bytes += sources.size() + triangles.size() + first_hits.size();
+                for (sheet_index, reflect_mask) in masks.into_iter().enumerate() {
                     let trace_params = TraceParams {
                         specular_object: generator as u32,
                         light_index: light_index as u32,
@@ -705,6 +733,8 @@ impl Wavefront {
                             Lattice {
                                 sources: &sources,
                                 triangles: &triangles,
+                                first_hits: &first_hits,
+                                first_sheet: sheet_index == 0,
                             },
                             &trace_params,
                             &splat_params,
@@ -758,9 +788,29 @@ struct SheetGroups<'a> {
 struct Lattice<'a> {
     sources: &'a wgpu::Buffer,
     triangles: &'a wgpu::Buffer,
+    /// Where each source's ray meets the generator, found once for all sheets.
+    first_hits: &'a wgpu::Buffer,
+    /// Whether this is the wavefront's first sheet (the one that finds the first hits).
+    first_sheet: bool,
 }
 
+/// Byte offsets of the two draws' arguments in a sheet's `draw_args` (classify.wgsl).
+const SPLAT_DRAW_ARGS_OFFSET: u64 = 0;
+const ORPHAN_DRAW_ARGS_OFFSET: u64 = 16;
+
 impl Sheet {
+    /// Device bytes of one sheet's own buffers (`new`), params aside: a `Traced` (64
+    /// bytes) per source; per triangle a verdict and its draw-list entries (3 with
+    /// `splat_orphans`: kept triangles plus orphan corners never exceed three per
+    /// triangle); per chunk of 64 triangles its two counts; two draws' arguments.
+    fn bytes_needed(source_count: u64, triangle_count: u64, splat_orphans: bool) -> u64 {
+        let list_words = if splat_orphans { 3 } else { 1 };
+        source_count * 64
+            + triangle_count.max(1) * 4 * (1 + list_words)
+            + triangle_count.div_ceil(CLASSIFY_CHUNK).max(1) * 8
+            + 32
+    }
+
     fn new(
         device: &wgpu::Device,
         lattice: Lattice<'_>,
@@ -775,24 +825,39 @@ impl Sheet {
                 usage,
             })
         };
-        let storage = |label: &str, size: u64| {
+        let buffer = |label: &str, size: u64, usage: wgpu::BufferUsages| {
             device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
                 size,
-                usage: wgpu::BufferUsages::STORAGE,
+                usage: wgpu::BufferUsages::STORAGE | usage,
                 mapped_at_creation: false,
             })
         };
+        let storage = |label: &str, size: u64| buffer(label, size, wgpu::BufferUsages::empty());
         let uniform = wgpu::BufferUsages::UNIFORM;
         let trace_params = init("wavefront trace params", bytemuck::bytes_of(trace), uniform);
         let splat_params = init("wavefront splat params", bytemuck::bytes_of(splat), uniform);
-        let Lattice { sources, triangles } = lattice;
+        let Lattice {
+            sources,
+            triangles,
+            first_hits,
+            first_sheet,
+        } = lattice;
         // One `Traced` (64 bytes) per source, one flag per triangle.
         let traced = storage("wavefront traced vertices", trace.source_count as u64 * 64);
-        let keep = storage(
-            "wavefront keep flags",
-            trace.triangle_count.max(1) as u64 * 4,
+        let triangle_count = u64::from(trace.triangle_count);
+        let keep = storage("wavefront keep flags", triangle_count.max(1) * 4);
+        // classify.wgsl's ordered compaction: counts then offsets per chunk, the list.
+        let chunks = storage(
+            "wavefront chunk offsets",
+            triangle_count.div_ceil(CLASSIFY_CHUNK).max(1) * 8,
         );
+        let list_words = if groups.orphans.is_some() { 3 } else { 1 };
+        let draw_list = storage(
+            "wavefront draw list",
+            triangle_count.max(1) * 4 * list_words,
+        );
+        let draw_args = buffer("wavefront draw args", 32, wgpu::BufferUsages::INDIRECT);
         let trace_group = groups.trace.bind(
             device,
             &[
@@ -800,6 +865,7 @@ impl Sheet {
                 ("sources", sources),
                 ("traced", &traced),
                 ("vertex_counts", groups.vertex_counts),
+                ("first_hits", first_hits),
             ],
         )?;
         let classify_group = groups.classify.bind(
@@ -810,24 +876,36 @@ impl Sheet {
                 ("triangles", triangles),
                 ("keep", &keep),
                 ("counters", groups.triangle_counts),
+                ("chunks", &chunks),
+                ("draw_list", &draw_list),
+                ("draw_args", &draw_args),
             ],
         )?;
-        // Both draw passes declare these in sheet_draw.wgsl.
-        let draw_entries: [(&str, &dyn caustics_gpu::pass::Bindable); 4] = [
+        // The camera-side passes declare these in sheet_draw.wgsl.
+        let draw_entries: [(&str, &dyn caustics_gpu::pass::Bindable); 5] = [
             ("sp", &splat_params),
             ("traced", &traced),
             ("triangles", triangles),
             ("keep", &keep),
+            ("draw_list", &draw_list),
         ];
         let splat_group = groups.splat.bind(device, &draw_entries)?;
         let orphan_group = match groups.orphans {
             Some(schema) => Some(schema.bind(device, &draw_entries)?),
             None => None,
         };
-        let bytes = [&trace_params, &splat_params, &traced, &keep]
-            .iter()
-            .map(|b| b.size())
-            .sum();
+        let bytes = [
+            &trace_params,
+            &splat_params,
+            &traced,
+            &keep,
+            &chunks,
+            &draw_list,
+            &draw_args,
+        ]
+        .iter()
+        .map(|b| b.size())
+        .sum();
         Ok(Self {
             source_count: trace.source_count,
             triangle_count: trace.triangle_count,
@@ -835,6 +913,8 @@ impl Sheet {
             classify_group,
             splat_group,
             orphan_group,
+            draw_args,
+            first_sheet,
             bytes,
         })
     }
@@ -862,17 +942,22 @@ impl Wavefront {
             let mut pass = self.trace.begin(frame)?;
             for sheet in &self.sheets {
                 pass.set_bind_group(1, &sheet.trace_group, &[]);
-                pass.dispatch("trace_vertices", [sheet.source_count.div_ceil(64), 1, 1])?;
+                let groups = [sheet.source_count.div_ceil(64), 1, 1];
+                if sheet.first_sheet {
+                    pass.dispatch("find_first_hits", groups)?;
+                }
+                pass.dispatch("trace_vertices", groups)?;
             }
         }
         {
             let mut pass = self.classify.begin(frame)?;
             for sheet in &self.sheets {
                 pass.set_bind_group(1, &sheet.classify_group, &[]);
-                pass.dispatch(
-                    "classify_triangles",
-                    [sheet.triangle_count.div_ceil(64), 1, 1],
-                )?;
+                let chunks = sheet.triangle_count.div_ceil(CLASSIFY_CHUNK as u32);
+                // One workgroup per chunk (its index is the chunk's).
+                pass.dispatch("classify_triangles", [chunks, 1, 1])?;
+                pass.dispatch("scan_chunks", [1, 1, 1])?;
+                pass.dispatch("scatter_chunks", [chunks.div_ceil(64), 1, 1])?;
             }
         }
         Ok(())
@@ -894,7 +979,7 @@ impl CausticsMethod for Wavefront {
                 let mut pass = splat.begin(frame, &attachments, None)?;
                 for sheet in &self.sheets {
                     pass.set_bind_group(1, &sheet.splat_group, &[]);
-                    pass.draw(0..3 * sheet.triangle_count, 0..1);
+                    pass.draw_indirect(&sheet.draw_args, SPLAT_DRAW_ARGS_OFFSET);
                 }
             }
             SplatDraw::Compute(compute) => compute.record(frame, &self.sheets)?,
@@ -904,8 +989,8 @@ impl CausticsMethod for Wavefront {
             for sheet in &self.sheets {
                 if let Some(group) = &sheet.orphan_group {
                     pass.set_bind_group(1, group, &[]);
-                    // One point per (triangle, corner).
-                    pass.draw(0..3 * sheet.triangle_count, 0..1);
+                    // One point per landed corner of a dropped triangle.
+                    pass.draw_indirect(&sheet.draw_args, ORPHAN_DRAW_ARGS_OFFSET);
                 }
             }
         }
@@ -966,6 +1051,21 @@ mod tests {
         shader::validate_wgsl("orphans.wgsl", &draw_source(ORPHANS_WGSL))?;
         shader::validate_wgsl("splat_compute.wgsl", &splat_compute_source())?;
         shader::validate_wgsl("resolve.wgsl", &resolve_source())
+    }
+
+    #[test]
+    fn the_first_hit_record_matches_the_wgsl() {
+        let (_, size) = caustics_gpu::layout::wgsl_struct_layout(&trace_source(), "FirstHit")
+            .expect("trace.wgsl declares FirstHit");
+        assert_eq!(u64::from(size), FIRST_HIT_BYTES);
+    }
+
+    #[test]
+    fn the_classify_chunk_matches_the_wgsl() {
+        assert_eq!(
+            caustics_gpu::layout::wgsl_u32_constant(&pass_source(CLASSIFY_WGSL), "CHUNK").ok(),
+            Some(CLASSIFY_CHUNK as u32)
+        );
     }
 
     #[test]

@@ -19,20 +19,14 @@ struct OrphanOut {
     @location(3) @interpolate(flat) side: f32,
 }
 
-// One point per (triangle, corner): vertex_index = 3 × triangle + corner.
+// One point per landed corner of a dropped triangle: draw_list's orphan entries are
+// 3 × triangle + corner, in that order (the draw starts at the first of them).
 @vertex
-fn vs_orphan(@builtin(vertex_index) vi: u32) -> OrphanOut {
+fn vs_orphan(@builtin(vertex_index) entry: u32) -> OrphanOut {
+    let vi = draw_list[entry];
     let tri = vi / 3u;
     var o: OrphanOut;
-    o.clip = vec4<f32>(2.0, 2.0, 2.0, 1.0);
-    if keep[tri] != 0u {
-        // Kept: the splat pass draws its light.
-        return o;
-    }
     let v = traced[triangles[vi]];
-    if v.info.x == NONE {
-        return o;
-    }
     let a = traced[triangles[3u * tri]].old_pos.xyz;
     let b = traced[triangles[3u * tri + 1u]].old_pos.xyz;
     let c = traced[triangles[3u * tri + 2u]].old_pos.xyz;

@@ -15,15 +15,11 @@ struct VsOut {
     @location(4) @interpolate(flat) side: f32,
 }
 
+// Three vertices per kept triangle, in triangle order (draw_list).
 @vertex
 fn vs_splat(@builtin(vertex_index) vi: u32) -> VsOut {
-    let tri = vi / 3u;
+    let tri = draw_list[vi / 3u];
     var o: VsOut;
-    if keep[tri] == 0u {
-        // Dropped: all three vertices at one point outside the clip volume.
-        o.clip = vec4<f32>(2.0, 2.0, 2.0, 1.0);
-        return o;
-    }
     let v = traced[triangles[3u * tri + vi % 3u]];
     o.clip = frame.view_proj * vec4<f32>(v.new_pos.xyz, 1.0);
     o.old_pos = v.old_pos.xyz;

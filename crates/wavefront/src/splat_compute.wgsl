@@ -127,7 +127,7 @@ fn splat(
     group_count_begin(lane);
     let tri = gid.y * groups.x * 64u + gid.x;
     var covered = 0u;
-    if tri < triangle_count() && keep[tri] != 0u {
+    if tri < triangle_count() && keep[tri] == KEEP_TRIANGLE {
         let f = footprint(tri);
         let pixels = footprint_pixels(f);
         var here = pixels > 0u;

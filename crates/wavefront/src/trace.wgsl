@@ -27,6 +27,12 @@
 // using all its sheet's reflections belongs to another sheet and is dropped here, so
 // the sheets partition the light. `bounces` allows that many hits on objects a path
 // has already left (the ring's opposite wall).
+//
+// Every sheet of a (light, generator) starts alike: the light's ray to the generator
+// and whether it is lit there (on a mesh, one or two BVH traversals per ray).
+// `find_first_hits` finds that once per wavefront, and every sheet's `trace_vertices`
+// starts from its record (the ten sheets of bumpy_glass with bounces=8: 10 % less
+// tracing; sphere_over_water's twelve: 22 %).
 
 struct Source {
     // xyz: a point on the specular surface (SOURCE_SURFACE) or a ray origin (SOURCE_RAY); w: kind.
@@ -65,6 +71,20 @@ const MAX_LEFT: u32 = 8u;
 @group(1) @binding(1) var<storage, read> sources: array<Source>;
 @group(1) @binding(2) var<storage, read_write> traced: array<Traced>;
 @group(1) @binding(3) var<storage, read_write> vertex_counts: VertexCounts;
+// One per source, shared by the wavefront's sheets (find_first_hits writes it).
+@group(1) @binding(4) var<storage, read_write> first_hits: array<FirstHit>;
+
+// Where a source's light meets the generator.
+struct FirstHit {
+    // xyz: the source's light-space coordinate (light_coordinate); w: INVALID_NONE, or
+    // why no sheet traces it on (a small whole number, exact as f32).
+    old_pos: vec4<f32>,
+    // The hit point, its shading and geometric normals, the light's direction there.
+    p: vec4<f32>,
+    ns: vec4<f32>,
+    ng: vec4<f32>,
+    d: vec4<f32>,
+}
 
 // Vertices per outcome (INVALID_* index; INVALID_NONE = landed), and landed vertices
 // whose path used a further bounce. Read back as `VERTEX_COUNTERS` in lib.rs.
@@ -122,8 +142,16 @@ fn mix_path(h: u32, object: u32, inside: u32) -> u32 {
     return x ^ (x >> 13u);
 }
 
+fn first_hit_invalid(old_pos: vec3<f32>, why: u32) -> FirstHit {
+    var h: FirstHit;
+    h.old_pos = vec4<f32>(old_pos, f32(why));
+    return h;
+}
+
+// The start every sheet shares: the first hit on the generator and the light's
+// visibility there (one invocation per source).
 @compute @workgroup_size(64)
-fn trace_vertices(@builtin(global_invocation_id) gid: vec3<u32>) {
+fn find_first_hits(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = gid.x;
     if i >= tp.source_count {
         return;
@@ -133,19 +161,18 @@ fn trace_vertices(@builtin(global_invocation_id) gid: vec3<u32>) {
     let generator = tp.specular_object;
     let eps = 1e-4;
 
-    // The first hit, on the generator, and the light's direction there.
     var p: vec3<f32>;
     var ns: vec3<f32>;
     var ng: vec3<f32>;
     var d: vec3<f32>;
+    var old_pos: vec3<f32>;
     var light_dist = NO_HIT;
     if src.origin.w == SOURCE_RAY {
         d = src.dir_or_normal.xyz;
-        vertex_old_pos = light_coordinate(light, src.origin.xyz, d);
+        old_pos = light_coordinate(light, src.origin.xyz, d);
         let first = scene_closest_hit(src.origin.xyz, d, 0.0, NONE);
         if first.object != generator {
-            traced[i] = invalid(INVALID_MISSED_GENERATOR);
-            count_vertex(INVALID_MISSED_GENERATOR);
+            first_hits[i] = first_hit_invalid(old_pos, INVALID_MISSED_GENERATOR);
             return;
         }
         p = src.origin.xyz + first.t * d;
@@ -154,8 +181,7 @@ fn trace_vertices(@builtin(global_invocation_id) gid: vec3<u32>) {
         // A directional light's lattice starts on a plane past the generator's bounds:
         // anything behind that plane shadows the ray.
         if light.kind == LIGHT_DIRECTIONAL && scene_closest_hit(src.origin.xyz, -d, 0.0, NONE).object != NONE {
-            traced[i] = invalid(INVALID_SHADOWED);
-            count_vertex(INVALID_SHADOWED);
+            first_hits[i] = first_hit_invalid(old_pos, INVALID_SHADOWED);
             return;
         }
     } else {
@@ -168,14 +194,45 @@ fn trace_vertices(@builtin(global_invocation_id) gid: vec3<u32>) {
             d = normalize(p - light.position.xyz);
             light_dist = length(p - light.position.xyz);
         }
-        vertex_old_pos = light_coordinate(light, p, d);
+        old_pos = light_coordinate(light, p, d);
         // Is the vertex lit? (walls or other objects between the light and the surface)
         if scene_closest_hit(p, -d, eps, generator).t < light_dist - eps {
-            traced[i] = invalid(INVALID_SHADOWED);
-            count_vertex(INVALID_SHADOWED);
+            first_hits[i] = first_hit_invalid(old_pos, INVALID_SHADOWED);
             return;
         }
     }
+    var h: FirstHit;
+    h.old_pos = vec4<f32>(old_pos, f32(INVALID_NONE));
+    h.p = vec4<f32>(p, 0.0);
+    h.ns = vec4<f32>(ns, 0.0);
+    h.ng = vec4<f32>(ng, 0.0);
+    h.d = vec4<f32>(d, 0.0);
+    first_hits[i] = h;
+}
+
+@compute @workgroup_size(64)
+fn trace_vertices(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = gid.x;
+    if i >= tp.source_count {
+        return;
+    }
+    let light = lights[tp.light_index];
+    let generator = tp.specular_object;
+    let eps = 1e-4;
+
+    // The first hit, on the generator, and the light's direction there (find_first_hits).
+    let start = first_hits[i];
+    vertex_old_pos = start.old_pos.xyz;
+    let start_outcome = u32(start.old_pos.w);
+    if start_outcome != INVALID_NONE {
+        traced[i] = invalid(start_outcome);
+        count_vertex(start_outcome);
+        return;
+    }
+    var p = start.p.xyz;
+    var ns = start.ns.xyz;
+    var ng = start.ng.xyz;
+    var d = start.d.xyz;
 
     // The flux density the vertex carries.
     let old_pos = vertex_old_pos;

@@ -33,3 +33,15 @@ struct SplatParams {
     pad1: f32,
     pad2: f32,
 }
+
+// classify.wgsl's word per triangle: kept, else the corners of the dropped triangle
+// that landed (bit 1 + corner), whose light the orphans pass draws.
+const KEEP_TRIANGLE: u32 = 1u;
+
+fn landed_corner(corner: u32) -> u32 {
+    return 2u << corner;
+}
+
+fn keep_word(landed: vec3<bool>) -> u32 {
+    return select(0u, landed_corner(0u), landed.x) | select(0u, landed_corner(1u), landed.y) | select(0u, landed_corner(2u), landed.z);
+}

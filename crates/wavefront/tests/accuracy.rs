@@ -449,6 +449,23 @@ fn bumpy_glass_orphans_bring_back_the_torn_light() {
             .pass_names()
             .contains(&"wavefront/orphan_points")
     );
+    // classify.wgsl's draw lists: the splat issues three vertices per kept triangle and
+    // the orphans one point per landed corner of a dropped triangle, nothing else (the
+    // image is that of drawing every triangle and dropping the rest, in the same order:
+    // `the_compute_splat_matches_the_hardware_splat_and_repeats_itself` checks the
+    // list's splat against the compute path, which reads the per-triangle verdicts).
+    for run in [&torn, &whole] {
+        assert_eq!(
+            run.measured.vertex_invocations("wavefront/splat"),
+            Some(3 * run.measured.counter("kept_triangles")),
+            "{:?}",
+            run.measured.counters
+        );
+    }
+    assert_eq!(
+        whole.measured.vertex_invocations("wavefront/orphan_points"),
+        Some(whole.measured.counter("orphan_corners"))
+    );
     let (f1, f2) = (torn.flux(), whole.flux());
     eprintln!(
         "bumpy glass: torn flux {f1:.4}, relMSE after flux {:.3e}, HDR-FLIP after flux {:.4}; with orphans flux {f2:.4}",
