@@ -7,6 +7,10 @@
 // for the irradiance on the visible receiver (surface caustic, Sect. 5.3). Outside the
 // beam both are zero, so which covering of the hull calls it changes nothing.
 
+// Whether the scene has a medium (u.sigma_t.w): the volume caustic's code exists only
+// then (set per pass by lib.rs; no default, so a pass built without it fails).
+override BEAM_MEDIUM: bool;
+
 @group(1) @binding(0) var<uniform> u: BeamUniforms;
 @group(1) @binding(1) var<storage, read> beams: array<Beam>;
 
@@ -67,7 +71,7 @@ fn shade_beam(b: Beam, pixel: vec2<u32>, r: vec3<f32>) -> BeamOut {
     }
 
     // Volume caustic: the camera ray's segment inside the beam (scan plane, Sect. 5.1).
-    if u.sigma_t.w > 0.5 {
+    if BEAM_MEDIUM {
         var np = cross(r, cross(r, n));
         if dot(np, np) < 1e-12 {
             np = cross(r, select(vec3<f32>(1.0, 0.0, 0.0), vec3<f32>(0.0, 1.0, 0.0), abs(r.x) > 0.9));
