@@ -98,9 +98,12 @@ pub fn measure(
     }
     let fill = FillProbes::new(ctx, options)?;
     let compute = ComputeProbes::new(ctx, options)?;
-    // Compute first: on lavapipe (Mesa 22.3.6) the FP32 kernel's timestamps read a
-    // few microseconds for any loop length once a render pass has run on the device
-    // (the other compute probes are unaffected); measured first it scales linearly.
+    // Compute first, as before the cause was known: on lavapipe (Mesa 22.3.6) a
+    // timestamp took its value at the next flushing command, so once a render pass had
+    // run, a compute pass's beginning was taken after its first dispatch, and the FP32
+    // probe (one dispatch) read a few microseconds for any loop length, the repeated-
+    // dispatch probes one dispatch short. The profiler now flushes right after a
+    // compute pass begins (caustics_gpu::profiling), so the order no longer matters.
     let mut probes = compute.probes();
     probes.extend(fill.probes());
     // Calibration frames, one warm-up, the trials and one count frame share a profiler.
