@@ -379,13 +379,9 @@ pub struct Experiment {
     pub figures: Vec<crate::figure_spec::Figure>,
 }
 
-/// `bench/experiments` of the workspace.
+/// `bench/experiments` of the workspace ([`caustics_scene::workspace_root`]).
 pub fn builtin_dir() -> PathBuf {
-    let manifest = Path::new(env!("CARGO_MANIFEST_DIR"));
-    manifest
-        .parent()
-        .and_then(Path::parent)
-        .unwrap_or(manifest)
+    caustics_scene::workspace_root()
         .join("bench")
         .join("experiments")
 }

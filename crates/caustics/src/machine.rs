@@ -42,14 +42,11 @@ pub struct Build {
     pub profile: String,
 }
 
-/// The checkout the binary was built from (the workspace root).
+/// The checkout a run reads and writes in ([`caustics_scene::workspace_root`]: the one
+/// the binary was built in, unless it was moved), canonical.
 pub fn checkout_root() -> std::path::PathBuf {
-    let manifest = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
-    let root = manifest
-        .parent()
-        .and_then(std::path::Path::parent)
-        .unwrap_or(manifest);
-    root.canonicalize().unwrap_or_else(|_| root.to_path_buf())
+    let root = caustics_scene::workspace_root();
+    root.canonicalize().unwrap_or(root)
 }
 
 /// How a result file names a file: relative to the checkout (with `/`) when the file
@@ -112,6 +109,9 @@ pub fn cpu_model() -> String {
         .unwrap_or_else(|| std::env::consts::ARCH.to_owned())
 }
 
+/// Runs git in the checkout the binary was built in, not [`checkout_root`]: a binary
+/// moved to another checkout must not name that one's commit as its own (where the
+/// build checkout is gone, [`SOURCE_COMMIT_ENV`] names it).
 fn git_bytes(args: &[&str]) -> Option<Vec<u8>> {
     let out = std::process::Command::new("git")
         .args(args)

@@ -181,6 +181,48 @@ fn list_shows_every_builtin_scene_and_method_defaults() {
     );
 }
 
+/// A binary run away from the checkout it was built in (copied to a machine with a
+/// GPU, installed) reads the scenes of the checkout `CAUSTICS_ROOT` names; where that
+/// holds none, an unknown scene's error says where it looked and what to set.
+#[test]
+fn caustics_root_names_the_checkout_of_a_moved_binary() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let root = tmp.path().join("checkout");
+    std::fs::create_dir_all(root.join("scenes")).expect("scenes");
+    std::fs::copy(
+        caustics_scene::resolve("ring").expect("ring"),
+        root.join("scenes").join("only_here.json"),
+    )
+    .expect("copy ring");
+    let o = Command::new(env!("CARGO_BIN_EXE_caustics"))
+        .arg("list")
+        .env(caustics_scene::ROOT_ENV, &root)
+        .output()
+        .expect("run caustics");
+    assert!(o.status.success(), "{}", stderr(&o));
+    let listed = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        listed.contains("only_here") && !listed.contains("water_pool"),
+        "{listed}"
+    );
+
+    let empty = tmp.path().join("no-checkout");
+    std::fs::create_dir_all(&empty).expect("empty");
+    let o = Command::new(env!("CARGO_BIN_EXE_caustics"))
+        .args(["run", "--scene", "water_pool", "--method", "wavefront"])
+        .env(caustics_scene::ROOT_ENV, &empty)
+        .output()
+        .expect("run caustics");
+    assert!(!o.status.success());
+    let err = stderr(&o);
+    assert!(
+        err.contains("no built-in scenes in")
+            && err.contains(&empty.join("scenes").display().to_string())
+            && err.contains(caustics_scene::ROOT_ENV),
+        "{err}"
+    );
+}
+
 /// A mesh over a scene limit is refused naming the flag that raises it, by `run` and
 /// by `reference`, before anything is written; the same flag raised lets it load.
 #[test]

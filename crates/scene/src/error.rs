@@ -56,11 +56,24 @@ pub enum SceneError {
         source: Box<crate::MeshError>,
     },
     /// [`crate::resolve`] got a name that is neither a built-in scene nor a scene file.
-    #[error("unknown scene `{name}`; built-in scenes: {}", available.join(", "))]
+    #[error(
+        "unknown scene `{name}`; {}",
+        if available.is_empty() {
+            format!(
+                "no built-in scenes in {} (a binary run away from its checkout: run it from a checkout, or set {}=<checkout>)",
+                dir.display(),
+                crate::ROOT_ENV
+            )
+        } else {
+            format!("built-in scenes ({}): {}", dir.display(), available.join(", "))
+        }
+    )]
     UnknownScene {
         /// The name that was asked for.
         name: String,
         /// The built-in scene names ([`crate::builtin_names`]).
         available: Vec<String>,
+        /// Where they were looked for ([`crate::builtin_dir`]).
+        dir: PathBuf,
     },
 }

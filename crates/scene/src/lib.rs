@@ -252,14 +252,40 @@ pub fn json_schema() -> serde_json::Value {
     serde_json::to_value(raw::scene_schema()).unwrap_or(serde_json::Value::Null)
 }
 
-/// The folder of the built-in scenes: `<workspace>/scenes`.
-pub fn builtin_dir() -> PathBuf {
+/// Names the workspace (the folder holding `scenes/` and `bench/experiments/`) for a
+/// binary that runs away from the checkout it was built in.
+pub const ROOT_ENV: &str = "CAUSTICS_ROOT";
+
+/// The workspace whose `scenes/` (and `bench/experiments/`) a run reads:
+/// `CAUSTICS_ROOT` when set; else the checkout the binary was built in, while it still
+/// holds `scenes/`; else the nearest folder at or above the current directory that
+/// holds `scenes/` (a binary copied to a machine with a GPU, or installed, and run from
+/// a checkout there); else the build checkout, which the errors then name.
+pub fn workspace_root() -> PathBuf {
     let manifest = Path::new(env!("CARGO_MANIFEST_DIR"));
-    manifest
-        .parent()
-        .and_then(Path::parent)
-        .unwrap_or(manifest)
-        .join("scenes")
+    let built = manifest.parent().and_then(Path::parent).unwrap_or(manifest);
+    let declared = std::env::var_os(ROOT_ENV)
+        .filter(|v| !v.is_empty())
+        .map(PathBuf::from);
+    let cwd = std::env::current_dir().ok();
+    choose_workspace_root(declared, built, cwd.as_deref())
+}
+
+/// [`workspace_root`]'s rule, apart from the process's environment.
+fn choose_workspace_root(declared: Option<PathBuf>, built: &Path, cwd: Option<&Path>) -> PathBuf {
+    if let Some(root) = declared {
+        return root;
+    }
+    if built.join("scenes").is_dir() {
+        return built.to_path_buf();
+    }
+    cwd.and_then(|c| c.ancestors().find(|a| a.join("scenes").is_dir()))
+        .map_or_else(|| built.to_path_buf(), Path::to_path_buf)
+}
+
+/// The folder of the built-in scenes: `<workspace>/scenes` ([`workspace_root`]).
+pub fn builtin_dir() -> PathBuf {
+    workspace_root().join("scenes")
 }
 
 /// Sorted names (file stems) of the built-in scenes, `scenes/*.json`.
@@ -302,6 +328,45 @@ pub fn resolve(name_or_path: &str) -> Result<PathBuf, SceneError> {
         Err(SceneError::UnknownScene {
             name: name_or_path.to_string(),
             available: builtin_names(),
+            dir: builtin_dir(),
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::choose_workspace_root;
+
+    /// A binary copied away from its checkout (the build path gone) finds the scenes of
+    /// the checkout it runs in, from any folder inside it; `CAUSTICS_ROOT` wins over
+    /// both; an intact build checkout wins over the current directory.
+    #[test]
+    fn workspace_root_follows_a_moved_binary() {
+        let tmp = tempfile::tempdir().expect("temp dir");
+        let checkout = tmp.path().join("checkout");
+        let deep = checkout.join("results").join("runs");
+        std::fs::create_dir_all(checkout.join("scenes")).expect("scenes");
+        std::fs::create_dir_all(&deep).expect("deep");
+        let gone = tmp.path().join("built-here-then-removed");
+        let elsewhere = tmp.path().join("elsewhere");
+        std::fs::create_dir_all(&elsewhere).expect("elsewhere");
+
+        assert_eq!(choose_workspace_root(None, &gone, Some(&deep)), checkout);
+        assert_eq!(
+            choose_workspace_root(None, &gone, Some(&checkout)),
+            checkout
+        );
+        // Nowhere to find scenes: the build path, which the unknown-scene error names.
+        assert_eq!(choose_workspace_root(None, &gone, Some(&elsewhere)), gone);
+        assert_eq!(choose_workspace_root(None, &gone, None), gone);
+        // The build checkout while it exists, wherever the binary runs.
+        assert_eq!(
+            choose_workspace_root(None, &checkout, Some(&elsewhere)),
+            checkout
+        );
+        assert_eq!(
+            choose_workspace_root(Some(elsewhere.clone()), &checkout, Some(&deep)),
+            elsewhere
+        );
     }
 }
