@@ -202,6 +202,7 @@ pub const CAPABILITIES: Capabilities = Capabilities {
     spot_light: true,
     sphere_light: false,
     environment_light: false,
+    no_medium_in_paper: "",
 };
 
 /// Scene limits of the beam pipeline beyond [`CAPABILITIES`].

@@ -32,3 +32,45 @@ pub fn parse_params(
 ) -> anyhow::Result<caustics_method::ParsedParams> {
     Ok((info.parse)(params)?)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::methods;
+
+    /// fog_sphere (a medium) is rendered by the volume methods and declined by every
+    /// other one with the sentence of its paper that leaves media out (issue 14: a
+    /// decline names what in the paper rules it out).
+    #[test]
+    fn a_medium_is_declined_with_the_papers_sentence() {
+        let path = caustics_scene::resolve("fog_sphere").expect("fog_sphere");
+        let scene = caustics_scene::Scene::load(&path).expect("fog_sphere loads");
+        assert!(scene.medium.is_some());
+        for m in methods() {
+            let params = (m.parse)(&serde_json::Value::Null).expect("defaults");
+            let verdict = m.supports(&scene, &params);
+            if m.capabilities.volume {
+                assert_eq!(verdict, Ok(()), "{}", m.name);
+                continue;
+            }
+            let why = verdict.expect_err(m.name).0;
+            let cited = m.capabilities.no_medium_in_paper;
+            assert!(
+                why.contains("participating medium") && !cited.is_empty() && why.contains(cited),
+                "{}: {why}",
+                m.name
+            );
+            // A quotation, and the paper's authors as `caustics list` names its source.
+            let author = m
+                .source
+                .split([' ', ','])
+                .find(|w| w.chars().next().is_some_and(char::is_uppercase))
+                .expect("source names an author");
+            assert!(
+                cited.contains('\u{201c}') && cited.contains(author),
+                "{}: {cited} (source {})",
+                m.name,
+                m.source
+            );
+        }
+    }
+}

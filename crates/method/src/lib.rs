@@ -60,6 +60,9 @@ pub struct Capabilities {
     pub sphere_light: bool,
     /// Environment lights (radiance by direction from infinitely far away).
     pub environment_light: bool,
+    /// For a method without `volume`: where its paper leaves participating media out
+    /// (the sentence, cited), given with the decline of a scene with a medium.
+    pub no_medium_in_paper: &'static str,
 }
 
 impl Capabilities {
@@ -114,10 +117,14 @@ impl Capabilities {
             }
         }
         if scene.medium.is_some() && !self.volume {
-            return Err(Unsupported(
-                "the scene has a participating medium, and this method renders neither volume caustics nor extinction"
-                    .into(),
-            ));
+            let mut why = String::from(
+                "the scene has a participating medium, and this method renders neither volume caustics nor extinction (its surface caustic would be unattenuated)",
+            );
+            if !self.no_medium_in_paper.is_empty() {
+                why.push_str(": ");
+                why.push_str(self.no_medium_in_paper);
+            }
+            return Err(Unsupported(why));
         }
         for (i, o) in scene.objects.iter().enumerate() {
             let name = &scene.materials[o.material].name;

@@ -254,6 +254,9 @@ pub const CAPABILITIES: Capabilities = Capabilities {
     spot_light: true,
     sphere_light: false,
     environment_light: false,
+    // Photon hits are where light paths end on diffuse surfaces: nothing scatters or is
+    // absorbed on the way.
+    no_medium_in_paper: "Umenhoffer, Patow & Szirmay-Kalos render surface caustics from the terminal hits of light paths (§1: \u{201c}Light paths starting at the light sources and visiting specular reflectors and refractors until they arrive at diffuse surfaces need to be simulated to create caustic effects\u{201d}; §2: \u{201c}the second projects caustic patterns onto the receiver surfaces\u{201d}): no scattering or absorption along the path",
 };
 
 /// Scene checks shared by both methods.

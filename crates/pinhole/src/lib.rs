@@ -206,6 +206,7 @@ impl Method for Pinhole {
         spot_light: true,
         sphere_light: true,
         environment_light: true,
+        no_medium_in_paper: "Wand & Stra\u{df}er leave volume caustics to future work (§5: \u{201c}The algorithm could also be combined with volume rendering (using textured slices) to obtain volumetric caustics.\u{201d}); the paper's gather has no extinction along the light path either",
     };
     const COUNTERS: &'static [CounterDoc] = COUNTER_DOCS;
 

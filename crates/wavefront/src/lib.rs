@@ -175,6 +175,7 @@ impl Method for Wavefront {
         spot_light: true,
         sphere_light: false,
         environment_light: false,
+        no_medium_in_paper: "Wallace's wavefront ends where its rays meet a surface (Wallace 2016: \u{201c}tracing a ray for that vertex along the sunlight direction, refracting it through the surface, and intersecting it with the ground geometry\u{201d}): no scattering or absorption on the way",
     };
     const COUNTERS: &'static [CounterDoc] = COUNTER_DOCS;
 
