@@ -92,6 +92,8 @@ method_params! {
         levels: u32 = 3 => closed(0.0, MAX_LEVELS as f64);
         /// split at silhouettes and surface discontinuities (Sect. 4.2)
         split_discontinuity: bool = true;
+        /// also split where a light-path family beyond the main path (the Fresnel reflection, the internal reflections of bounces) parts ways at the corners while the main path does not, ranked by that family's light (paper: false, its oracle looks at the main path, and such a leaf loses that light or, with splat_orphans, draws it as three points of a third of its flux: bright dots where the leaf is coarse)
+        split_families: bool = false;
         /// corner normals differing by more than this split (degrees)
         split_normal_deg: f64 = 30.0 => above(0.0, 180.0);
         /// corner depths changing faster than this (|Δdepth|/lateral) split (bound: a slope of 1e3 is 89.94°)
@@ -127,7 +129,8 @@ impl Refinement {
     }
 
     /// The enabled criteria as `split_flags` of `BeamUniforms` (types.wgsl): 1
-    /// discontinuity, 2 energy, 4 camera.
+    /// discontinuity, 2 energy, 4 camera (`split_families` is a pipeline constant of
+    /// generate.wgsl instead).
     pub fn flags(&self) -> u32 {
         (self.split_discontinuity as u32)
             | ((self.split_energy as u32) << 1)

@@ -84,7 +84,7 @@ const SPLIT_HISTOGRAM: Word = Word {
     )
 };
 
-/// Every word, by index (words 0 to 7 and 48 to 63 are unused).
+/// Every word, by index (words 0 to 7 and 49 to 63 are unused).
 #[rustfmt::skip]
 pub(crate) const CONTROL: &[Word] = &[
     LEVEL,
@@ -114,6 +114,7 @@ pub(crate) const CONTROL: &[Word] = &[
     counter("C_ORPHAN_TOTAL", 45, "orphans", "orphan records written (splat_orphans)"),
     counter("C_OVERFLOW_ORPHANS", 46, "overflow_orphans", "orphan records that found no room (splat_orphans)"),
     counter("C_ORPHAN_CORNERS", 47, "orphan_corners", "landed corners of the orphan records (splat_orphans)"),
+    counter("C_SPLIT_FAMILY", 48, "splits_family", "splits asked because a further light-path family parts ways"),
     SPLIT_HISTOGRAM,
 ];
 
@@ -151,6 +152,7 @@ pub const COUNTER_DOCS: &[CounterDoc] = &[
     CounterDoc { name: "splits_camera", doc: "triangles split by the camera criterion: the beam's base spans more than split_camera_px pixels where its central ray passes closest to the eye (0 in static-grid, which never splits; a triangle split for several reasons counts in each splits_*)" },
     CounterDoc { name: "splits_discontinuity", doc: "triangles split by the discontinuity criterion: corners partly missing the generators, on different paths, with normals or depths that differ too much, or an edge midpoint whose light lands off the linear prediction (0 in static-grid)" },
     CounterDoc { name: "splits_deferred", doc: "splits the oracle asked for that the beam budget left undone: the triangle stayed a leaf because splits of higher priority used the budget (0 without beam_budget; counted also in splits_*)" },
+    CounterDoc { name: "splits_family", doc: "with split_families: triangles split because a light-path family beyond the main path (the Fresnel reflection, the internal reflections of bounces) parts ways at their corners while the main path does not and no other criterion asked (0 in static-grid)" },
     CounterDoc { name: "splits_energy", doc: "triangles split by the energy criterion: the beam's flux relative to an unrefined beam's times how much it focuses where it is seen exceeds split_energy_threshold (0 in static-grid)" },
 ];
 

@@ -725,6 +725,11 @@ impl BeamMethod {
             .kernel_groups("budget", &[0, 1])
             .kernel_groups("scan", &[0, 1])
             .kernel_groups("emit", &[0, 1, BVH_GROUP])
+            // split_families is compiled in only where asked (generate.wgsl `decide`).
+            .constants(&[(
+                "SPLIT_FAMILIES",
+                f64::from(u8::from(config.refinement.split_families)),
+            )])
             .build()?;
 
         let (rasterize, raster_bytes) = HullRaster::build(ctx, renderer, config, name)?;
