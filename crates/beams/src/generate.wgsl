@@ -200,8 +200,9 @@ struct Leaf {
     mask: u32,
     no_receiver: u32,
     orphans: u32,
-    // The flux of the orphaned families beyond the main path, relative to the light's
-    // (their landed corners' mean weight): how much light a split would keep in beams.
+    // With SPLIT_FAMILIES: the light of the orphaned families beyond the main path,
+    // relative to the light's (a third of each landed corner's weight, summed over
+    // them): what a split would keep in beams.
     orphan_share: f32,
 }
 

@@ -46,6 +46,11 @@
 //!   reflection's beams, the paper's families; the internal reflections of `bounces`
 //!   follow the leaves it buys, so following more light does not coarsen the main
 //!   caustic;
+//! - the paper's oracle looks at the main path only; `split_families` (off by default)
+//!   also splits a leaf whose Fresnel reflection or internal reflections part ways at
+//!   its corners while its main path does not, ranked by that light's share times its
+//!   size in pixels (such a leaf otherwise loses that light or, with `splat_orphans`,
+//!   draws it as bright points where it is coarse);
 //! - all distance impostors (one per specular object, one of the diffuse receivers
 //!   around the generators) share one texture atlas, so each query is one inlined
 //!   search (WGSL inlines every call);
