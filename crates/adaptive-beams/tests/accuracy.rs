@@ -206,8 +206,9 @@ fn splat_orphans_bring_back_the_light_of_torn_leaves() {
 }
 
 /// `split_families` (off in the paper's oracle, which looks at the main path): in
-/// two_lenses with the extended light paths the light reflected inside a lens parts
-/// ways at corners whose main path does not, so coarse leaves draw it as orphan points
+/// two_lenses with the extended light paths the Fresnel reflection or the light
+/// reflected inside a lens parts ways at corners whose main path does not (splits_family
+/// counts those leaves), so coarse leaves draw it as orphan points
 /// (three of a third of the leaf's flux each); splitting them where a further family
 /// parts keeps that light in beams.
 #[test]
