@@ -40,6 +40,9 @@ use crate::stats::{Summary, summarize};
 /// Most frames of one sequence.
 pub const MAX_ANIMATION_FRAMES: usize = 10_000;
 
+/// Name of a sequence's result file in its folder.
+pub const ANIMATION_FILE: &str = "animation.json";
+
 /// Version of `animation.json`.
 pub const ANIMATION_SCHEMA_VERSION: u32 = 1;
 
@@ -74,27 +77,79 @@ impl AnimateSpec {
             end_s: num("END", end)?,
             fps: num("FPS", fps)?,
         };
-        if spec.start_s.abs() > MAX_TIME_S || spec.end_s.abs() > MAX_TIME_S {
-            return Err(bad(format!(
-                "expected START and END within ±{MAX_TIME_S:e} s"
-            )));
-        }
-        if spec.end_s <= spec.start_s {
-            return Err(bad("expected END after START".into()));
-        }
-        if !(spec.fps > 0.0 && spec.fps <= 1000.0) {
-            return Err(bad(format!(
-                "FPS: expected a rate in (0, 1000], got {}",
-                spec.fps
-            )));
-        }
-        let n = spec.frame_count();
-        if n == 0 || n > MAX_ANIMATION_FRAMES {
-            return Err(bad(format!(
-                "expected 1..={MAX_ANIMATION_FRAMES} frames, got {n} ((END − START)·FPS)"
-            )));
-        }
+        spec.check().map_err(|(field, why)| {
+            let name = match field {
+                "start_s" => "START",
+                "end_s" => "END",
+                _ => "FPS",
+            };
+            bad(format!("{name}: {why}"))
+        })?;
         Ok(spec)
+    }
+
+    /// What makes a sequence valid: START and END within ±[`MAX_TIME_S`], END after
+    /// START, FPS in (0, 1000], 1..=[`MAX_ANIMATION_FRAMES`] frames. On failure: the
+    /// field at fault (`start_s`, `end_s`, `fps`) and what was expected.
+    pub fn check(&self) -> std::result::Result<(), (&'static str, String)> {
+        for (field, v) in [
+            ("start_s", self.start_s),
+            ("end_s", self.end_s),
+            ("fps", self.fps),
+        ] {
+            if !v.is_finite() {
+                return Err((field, format!("expected a finite number, got {v}")));
+            }
+        }
+        for (field, v) in [("start_s", self.start_s), ("end_s", self.end_s)] {
+            if v.abs() > MAX_TIME_S {
+                return Err((
+                    field,
+                    format!("expected START and END within ±{MAX_TIME_S:e} s, got {v}"),
+                ));
+            }
+        }
+        if self.end_s <= self.start_s {
+            return Err((
+                "end_s",
+                format!(
+                    "expected END after START ({}), got {}",
+                    self.start_s, self.end_s
+                ),
+            ));
+        }
+        if !(self.fps > 0.0 && self.fps <= 1000.0) {
+            return Err((
+                "fps",
+                format!("expected a rate in (0, 1000], got {}", self.fps),
+            ));
+        }
+        let n = self.frame_count();
+        if n == 0 || n > MAX_ANIMATION_FRAMES {
+            return Err((
+                "end_s",
+                format!("expected 1..={MAX_ANIMATION_FRAMES} frames, got {n} ((END − START)·FPS)"),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Frames between scored instants when none is given: a quarter of the sequence, so
+    /// 4 scored instants (and their partners).
+    pub fn default_reference_every(&self) -> u32 {
+        u32::try_from((self.frame_count() / 4).max(1)).unwrap_or(u32::MAX)
+    }
+
+    /// The instants scored with `reference_every` (> 0): every `reference_every`-th frame
+    /// and the frame after each, in time order; the instants whose references a
+    /// sequence needs.
+    pub fn scored_instants(&self, reference_every: u32) -> Vec<f32> {
+        let instants = self.instants();
+        scored_indices(instants.len(), reference_every.max(1) as usize)
+            .into_iter()
+            .filter(|&(_, scored)| scored)
+            .map(|(i, _)| instants[i])
+            .collect()
     }
 
     /// Number of frames: ⌈(END − START)·FPS⌉ (rounded to the nearest first when within
@@ -153,6 +208,86 @@ pub struct AnimationResult {
     pub still_rel_rmse: Option<f64>,
     /// Wall time of the whole sequence (s).
     pub wall_s: f64,
+}
+
+/// A sequence in one line: what `caustics animations`, `reproduce`'s summary and its
+/// Bencher file show of it. Errors are means over the scored instants.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SequenceFigures {
+    /// First instant (s).
+    pub start_s: f32,
+    /// End (s), not included.
+    pub end_s: f32,
+    /// Frames per second.
+    pub fps: f32,
+    /// Frames (instants) rendered.
+    pub frames: usize,
+    /// Frames between scored instants.
+    pub reference_every: u32,
+    /// Instants scored against a reference.
+    pub scored: usize,
+    /// Mean flux ratio of the scored instants.
+    pub flux_ratio: Option<f64>,
+    /// Mean relMSE of the scored instants.
+    pub rel_mse: Option<f64>,
+    /// Mean HDR-FLIP of the scored instants.
+    pub hdr_flip: Option<f64>,
+    /// RMS over the scored pairs of the temporal relRMSE.
+    pub temporal_rel_rmse: Option<f64>,
+    /// RMS over the scored pairs of the still relRMSE of the same frames.
+    pub still_rel_rmse: Option<f64>,
+    /// Mean change ratio Σ Δm² / Σ Δr² over the scored pairs.
+    pub change_ratio: Option<f64>,
+    /// CPU ms of each instant's rebuild: median (p10, p90).
+    pub rebuild_ms: Option<crate::summary::Spread>,
+    /// Wall time of the whole sequence (s).
+    pub wall_s: f64,
+}
+
+impl SequenceFigures {
+    /// The figures of a sequence.
+    pub fn of(r: &AnimationResult) -> SequenceFigures {
+        let scored: Vec<&Errors> = r.frames.iter().filter_map(|f| f.errors.as_ref()).collect();
+        let mean = |v: Vec<f64>| (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64);
+        SequenceFigures {
+            start_s: r.sequence.start_s,
+            end_s: r.sequence.end_s,
+            fps: r.sequence.fps,
+            frames: r.frames.len(),
+            reference_every: r.reference_every,
+            scored: scored.len(),
+            flux_ratio: mean(scored.iter().filter_map(|e| e.flux_ratio).collect()),
+            rel_mse: mean(scored.iter().map(|e| e.rel_mse).collect()),
+            hdr_flip: mean(scored.iter().filter_map(|e| e.hdr_flip).collect()),
+            temporal_rel_rmse: r.temporal_rel_rmse,
+            still_rel_rmse: r.still_rel_rmse,
+            change_ratio: mean(
+                r.temporal
+                    .iter()
+                    .filter_map(|p| p.error.change_ratio)
+                    .collect(),
+            ),
+            rebuild_ms: r.rebuild_ms.as_ref().map(crate::summary::Spread::from),
+            wall_s: r.wall_s,
+        }
+    }
+
+    /// The figures by their `bmf.json` measure names (finite ones only).
+    pub fn measures(&self) -> Vec<(&'static str, f64)> {
+        [
+            ("sequence_flux_ratio", self.flux_ratio),
+            ("sequence_rel_mse", self.rel_mse),
+            ("sequence_hdr_flip", self.hdr_flip),
+            ("temporal_rel_rmse", self.temporal_rel_rmse),
+            ("still_rel_rmse", self.still_rel_rmse),
+            ("change_ratio", self.change_ratio),
+            ("rebuild_ms", self.rebuild_ms.map(|s| s.median)),
+        ]
+        .into_iter()
+        .filter_map(|(k, v)| Some((k, v.filter(|v| v.is_finite())?)))
+        .collect()
+    }
 }
 
 /// One frame of a sequence.
@@ -229,7 +364,7 @@ pub fn run_animated(o: &RunOptions, spec: &AnimateSpec, scene: Scene) -> Result<
     let every = match o.reference_every {
         Some(0) => bail!("--reference-every: expected a positive number of frames, got 0"),
         Some(k) => k as usize,
-        None => (n / 4).max(1),
+        None => spec.default_reference_every() as usize,
     };
     if !scene.is_animated() {
         eprintln!(
@@ -576,7 +711,6 @@ pub fn side_by_side(all: &[AnimationResult]) -> String {
             format!("{:.2} ({:.2}–{:.2})", s.median, s.p10, s.p90)
         })
     };
-    let mean = |v: Vec<f64>| (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64);
     let _ = writeln!(
         s,
         "# Animated sequences side by side\n\nEvery frame a new instant (scene posed, uploaded, method created anew; its rebuild on the CPU apart, pipelines compiled once per sequence); GPU times are medians (p10–p90) of the timed frames, one per instant. Errors: means over the scored instants (pixel-averaged scoring frames against references at those instants). Temporal relRMSE: the method's frame-to-frame change against the reference's, RMS over the scored pairs, beside the same frames' still relRMSE; change ratio: Σ Δm² / Σ Δr² (1 = the method's image changes as much as the caustic's).\n"
@@ -586,7 +720,7 @@ pub fn side_by_side(all: &[AnimationResult]) -> String {
         "| scene | method | parameters | frames | adapter | method GPU ms | frame GPU ms | rebuild CPU ms | flux | relMSE | HDR-FLIP | temporal relRMSE | still relRMSE | change ratio |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
     );
     for r in all {
-        let scored: Vec<&Errors> = r.frames.iter().filter_map(|f| f.errors.as_ref()).collect();
+        let f = SequenceFigures::of(r);
         let params = match &r.method.params {
             serde_json::Value::Object(m) if m.is_empty() => "defaults".to_owned(),
             p => p.to_string(),
@@ -597,32 +731,20 @@ pub fn side_by_side(all: &[AnimationResult]) -> String {
             r.scene.name,
             r.method.name,
             params,
-            r.frames.len(),
-            r.sequence.start_s,
-            r.sequence.end_s,
-            r.sequence.fps,
+            f.frames,
+            f.start_s,
+            f.end_s,
+            f.fps,
             r.machine.adapter,
             median(&r.timing.method_gpu_ms),
             median(&r.timing.frame_gpu_ms),
             median(&r.rebuild_ms),
-            opt(
-                mean(scored.iter().filter_map(|e| e.flux_ratio).collect()),
-                3
-            ),
-            mean(scored.iter().map(|e| e.rel_mse).collect())
-                .map_or("–".into(), |v| format!("{v:.3e}")),
-            opt(mean(scored.iter().filter_map(|e| e.hdr_flip).collect()), 3),
-            opt(r.temporal_rel_rmse, 4),
-            opt(r.still_rel_rmse, 4),
-            opt(
-                mean(
-                    r.temporal
-                        .iter()
-                        .filter_map(|p| p.error.change_ratio)
-                        .collect()
-                ),
-                3
-            ),
+            opt(f.flux_ratio, 3),
+            f.rel_mse.map_or("–".into(), |v| format!("{v:.3e}")),
+            opt(f.hdr_flip, 3),
+            opt(f.temporal_rel_rmse, 4),
+            opt(f.still_rel_rmse, 4),
+            opt(f.change_ratio, 3),
         );
     }
     s
@@ -869,5 +991,13 @@ mod tests {
             .collect();
         assert_eq!(s, [0, 1, 4, 5, 8, 9]);
         assert!(scored_indices(3, 1).iter().all(|(_, s)| *s));
+        // The instants whose references a sequence needs: 0:1:10 scored every 4th.
+        let spec = AnimateSpec::parse("0:1:10").expect("valid");
+        let t = spec.scored_instants(4);
+        assert_eq!(t.len(), 6);
+        for (have, want) in t.iter().zip([0.0, 0.1, 0.4, 0.5, 0.8, 0.9]) {
+            assert!((have - want).abs() < 1e-6, "{t:?}");
+        }
+        assert_eq!(spec.default_reference_every(), 2);
     }
 }

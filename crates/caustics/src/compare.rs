@@ -466,10 +466,16 @@ fn collect_results_maybe_none(root: &Path) -> Result<BTreeMap<String, RunResult>
     if root.join("manifest.json").is_file() {
         let m = crate::reproduce::read_manifest(root)?;
         let mut out = BTreeMap::new();
+        // A sequence's folder holds an animation.json, which `compare_sequences` pairs.
+        let mut sequences = 0;
         for rel in m.runs.iter().filter_map(|r| r.dir.as_ref()) {
+            if crate::summary::is_sequence_dir(&root.join(rel)) {
+                sequences += 1;
+                continue;
+            }
             out.insert(rel.clone(), crate::summary::read_result(&root.join(rel))?);
         }
-        if out.is_empty() {
+        if out.is_empty() && sequences == 0 {
             bail!(
                 "{}: its manifest lists no run that was done",
                 root.display()

@@ -24,7 +24,8 @@
 //! parameters of a group); `params` may also be an array of such objects (their union).
 //! `"scenes": "*"` is every built-in scene and `"methods": "*"` every registered method.
 //! An optional `figures` list declares what to draw from the runs (image grids, lines,
-//! ratios, tables; [`crate::figure_spec`]).
+//! ratios, tables; [`crate::figure_spec`]). An optional `animate` (top level or per
+//! group) makes the runs animated sequences ([`Sequence`], `caustics run --animate`).
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -108,6 +109,11 @@ pub struct ExperimentFile {
     /// reference's footprint"). Each name must be a scene the experiment renders.
     #[serde(default)]
     pub score_grid_scenes: BTreeMap<String, u32>,
+    /// Render every run as an animated sequence (`caustics run --animate`) instead of a
+    /// still instant, unless a group overrides it: each frame a new instant, errors and
+    /// the temporal error at the scored instants (`frames` and `warmup` do not apply).
+    #[serde(default)]
+    pub animate: Option<Sequence>,
     /// Photon budget of references that `reproduce` renders when the cache has none for
     /// a scene at the experiment's resolution. Absent: such runs are made without errors
     /// and the summary says so.
@@ -236,11 +242,77 @@ pub struct RunGroup {
     /// Overrides the experiment's warm-up.
     #[serde(default)]
     pub warmup: Option<u32>,
+    /// Overrides the experiment's `animate`: a sequence, or `false` for still runs.
+    #[serde(default)]
+    pub animate: Option<SequenceOrStill>,
     /// Renders each extended light a method does not take as this many representative
     /// lights (`caustics run --representative-lights`, 1..=64), or each of a list of
     /// counts (swept like a parameter); absent: such a method declines.
     #[serde(default)]
     pub representative_lights: Option<Counts>,
+}
+
+/// An animated sequence of an experiment's runs: `caustics run --animate
+/// START:END:FPS --reference-every K`.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct Sequence {
+    /// First instant (s).
+    pub start_s: f32,
+    /// End of the sequence (s), not included.
+    pub end_s: f32,
+    /// Frames per second.
+    pub fps: f32,
+    /// Frames between scored instants (each scored with the frame after it, for the
+    /// temporal error); absent: a quarter of the sequence.
+    #[serde(default)]
+    pub reference_every: Option<u32>,
+}
+
+impl Sequence {
+    /// The sequence's instants.
+    pub fn spec(&self) -> crate::animate::AnimateSpec {
+        crate::animate::AnimateSpec {
+            start_s: self.start_s,
+            end_s: self.end_s,
+            fps: self.fps,
+        }
+    }
+
+    /// Frames between scored instants, the default filled in.
+    pub fn reference_every(&self) -> u32 {
+        self.reference_every
+            .unwrap_or_else(|| self.spec().default_reference_every())
+    }
+
+    /// The instants whose references the sequence is scored against.
+    pub fn scored_instants(&self) -> Vec<f32> {
+        self.spec().scored_instants(self.reference_every())
+    }
+
+    fn check(&self, at: &str, invalid: &dyn Fn(&str, String) -> ExperimentError) -> Result<()> {
+        self.spec()
+            .check()
+            .map_err(|(field, why)| invalid(&format!("{at}.{field}"), why))?;
+        if self.reference_every == Some(0) {
+            return Err(invalid(
+                &format!("{at}.reference_every"),
+                "expected a positive number of frames, got 0".into(),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// A group's `animate`: its own sequence, or `false` (still runs in an animated
+/// experiment).
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(untagged)]
+pub enum SequenceOrStill {
+    /// `false`: still runs.
+    Still(bool),
+    /// A sequence.
+    Sequence(Sequence),
 }
 
 /// One count or a list of counts to sweep.
@@ -334,6 +406,8 @@ pub struct RunSpec {
     /// N of the scoring frame's N×N sub-pixel offsets: `score_grid`, or the scene's
     /// entry in `score_grid_scenes`.
     pub score_grid: u32,
+    /// The sequence, for an animated run (`frames` and `warmup` then do not apply).
+    pub animate: Option<Sequence>,
 }
 
 impl RunSpec {
@@ -543,6 +617,9 @@ impl Experiment {
             }
         }
         check_resolution(&def.resolution, "resolution", &invalid)?;
+        if let Some(a) = &def.animate {
+            a.check("animate", &invalid)?;
+        }
         if let Some(r) = &def.reference {
             if r.photons == 0 {
                 return Err(invalid(
@@ -589,6 +666,21 @@ impl Experiment {
                         ));
                     }
                     values.into_iter().map(Some).collect()
+                }
+            };
+            let animate = match group.animate {
+                None => def.animate,
+                Some(SequenceOrStill::Still(false)) => None,
+                Some(SequenceOrStill::Still(true)) => {
+                    return Err(invalid(
+                        &at("animate"),
+                        "expected a sequence {\"start_s\", \"end_s\", \"fps\"} or false, got true"
+                            .into(),
+                    ));
+                }
+                Some(SequenceOrStill::Sequence(s)) => {
+                    s.check(&at("animate"), &invalid)?;
+                    Some(s)
                 }
             };
             let label = group.label.clone().unwrap_or_else(|| format!("group{g}"));
@@ -641,6 +733,7 @@ impl Experiment {
                             frames,
                             warmup,
                             score_grid,
+                            animate,
                         };
                         if let Some(first) = seen.insert(spec.key(), g) {
                             return Err(invalid(
@@ -691,6 +784,13 @@ impl Experiment {
                     ));
                 }
             }
+        }
+        let grid = def.figures.iter().position(|f| f.kind == "image_grid");
+        if let Some(i) = grid.filter(|_| runs.iter().any(|r| r.animate.is_some())) {
+            return Err(invalid(
+                &format!("figures[{i}].kind"),
+                "an image grid draws still runs' images, and this experiment's runs include animated sequences (their scored instants' images are in each sequence's folder); use a line, ratio or table".into(),
+            ));
         }
         let figures = crate::figure_spec::parse(&def.figures, &runs, &invalid)?;
         let mut what_runs: serde_json::Value =

@@ -275,11 +275,16 @@ fn experiment_section(html: &mut String, dir: &Path, out: &Path, references: &Pa
         }
     }
     for g in &groups {
-        let rows: Vec<&Row> = s
+        let done = s
             .runs
             .iter()
-            .filter(|r| r.group == *g && r.status == "done")
-            .collect();
+            .filter(|r| r.group == *g && r.status == "done");
+        let sequences: Vec<&Row> = done.clone().filter(|r| r.sequence.is_some()).collect();
+        let rows: Vec<&Row> = done.filter(|r| r.sequence.is_none()).collect();
+        if !sequences.is_empty() {
+            let _ = writeln!(html, "<h3>{}: animated sequences</h3>", esc(g));
+            sequence_table(html, &s, &sequences, dir, out)?;
+        }
         if !rows.is_empty() {
             let _ = writeln!(html, "<h3>{}</h3>", esc(g));
             table(html, &s, &rows);
@@ -332,6 +337,68 @@ fn experiment_section(html: &mut String, dir: &Path, out: &Path, references: &Pa
         }
     }
     gallery(html, &s, dir, out, references)?;
+    Ok(())
+}
+
+/// The animated runs of a group: their sequence figures (as the summary's table) and the
+/// caustic of each scored instant, tone-mapped at the sequence's one exposure.
+fn sequence_table(
+    html: &mut String,
+    s: &Summary,
+    rows: &[&Row],
+    dir: &Path,
+    out: &Path,
+) -> Result<()> {
+    html.push_str("<p class=meta>Each frame a new instant (scene posed, uploaded, method created anew). GPU ms: median (p10–p90) over the instants; rebuild: CPU ms of each instant's upload and setup. Errors: means over the scored instants. Temporal relRMSE: the method's frame-to-frame change against the reference's (flicker), beside the same frames' still relRMSE; change ratio Σ Δm² / Σ Δr².</p>\n<table><tr><th>scene</th><th>method</th><th>params</th><th>frames</th><th>method GPU ms</th><th>rebuild CPU ms</th><th>flux</th><th>relMSE</th><th>HDR-FLIP</th><th>temporal relRMSE</th><th>still relRMSE</th><th>change ratio</th><th>scored instants</th></tr>\n");
+    let spread = |v: &Option<crate::summary::Spread>| {
+        v.map_or("–".into(), |v| {
+            format!("{:.2} ({:.2}–{:.2})", v.median, v.p10, v.p90)
+        })
+    };
+    let o = |v: Option<f64>, d: usize| v.map_or("–".into(), |v| format!("{v:.d$}"));
+    for r in rows {
+        let (Some(q), Some(rel_dir)) = (&r.sequence, &r.dir) else {
+            continue;
+        };
+        let a = crate::summary::read_sequence(&dir.join(rel_dir))?;
+        let mut images = String::new();
+        for f in &a.frames {
+            let Some(img) = &f.image else { continue };
+            let from = dir.join(rel_dir).join(img);
+            if !from.is_file() {
+                continue;
+            }
+            let rel = copy(&from, out, &format!("img/{}/{rel_dir}/{img}", s.experiment))?;
+            let _ = write!(
+                images,
+                "<img src=\"{}\" width={} alt=\"t = {:.3} s\" title=\"t = {:.3} s\">",
+                esc(&rel),
+                display_width(a.scene.width) / 2,
+                f.time_s,
+                f.time_s
+            );
+        }
+        let _ = writeln!(
+            html,
+            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{} ({}–{} s, {} FPS)</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{images}</td></tr>",
+            esc(&r.scene),
+            esc(&r.method),
+            esc(&params_cell(r)),
+            q.frames,
+            q.start_s,
+            q.end_s,
+            q.fps,
+            spread(&r.method_gpu_ms),
+            spread(&q.rebuild_ms),
+            o(q.flux_ratio, 3),
+            q.rel_mse.map_or("–".into(), |v| format!("{v:.3e}")),
+            o(q.hdr_flip, 3),
+            o(q.temporal_rel_rmse, 4),
+            o(q.still_rel_rmse, 4),
+            o(q.change_ratio, 3),
+        );
+    }
+    html.push_str("</table>\n");
     Ok(())
 }
 
@@ -404,10 +471,11 @@ fn gallery(
     out: &Path,
     references: &Path,
 ) -> Result<()> {
+    // Sequences show their scored instants in their own table.
     let done: Vec<&Row> = s
         .runs
         .iter()
-        .filter(|r| r.status == "done" && r.dir.is_some())
+        .filter(|r| r.status == "done" && r.dir.is_some() && r.sequence.is_none())
         .collect();
     if done.is_empty() {
         return Ok(());

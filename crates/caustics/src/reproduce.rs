@@ -8,6 +8,7 @@
 //! ```text
 //! manifest.json                      experiment, file hash, scale, shard, status of every run
 //! runs/<params>/<scene>/<method>/    result.json and images of one run (`caustics run`'s layout)
+//!   …/<method>/animation/            animation.json of a sequence (the experiment's `animate`)
 //! summary.json summary.md bmf.json   written from the manifest and the result files
 //! plots/*.png
 //! ```
@@ -321,10 +322,15 @@ fn reproduce_one(
         let expected = Expected {
             spec,
             exposure: e.def.exposure,
-            reference: crate::references::find(&args.references, &spec.scene)
-                .ok()
-                .flatten()
-                .map(|c| c.caustic_key()),
+            references: reference_scenes(spec)?
+                .iter()
+                .map(|scene| {
+                    crate::references::find(&args.references, scene)
+                        .ok()
+                        .flatten()
+                        .map(|c| c.caustic_key())
+                })
+                .collect(),
             build: &build,
             cpu: &cpu,
             adapter: adapter.as_deref(),
@@ -333,7 +339,7 @@ fn reproduce_one(
         };
         let status = match crate::resume::completeness(&dir, &expected) {
             Completeness::Complete(result) => {
-                if !args.keep_exr {
+                if let Some(result) = result.filter(|_| !args.keep_exr) {
                     crate::resume::drop_exrs(&dir, &result.images);
                 }
                 kept += 1;
@@ -511,8 +517,26 @@ fn check_manifest(m: &Manifest) -> std::result::Result<(), String> {
     Ok(())
 }
 
+/// The scenes a run is scored against: its scene, or a sequence's scene posed at each
+/// scored instant.
+fn reference_scenes(spec: &RunSpec) -> Result<Vec<caustics_scene::Scene>> {
+    match &spec.animate {
+        None => Ok(vec![spec.scene.clone()]),
+        Some(sequence) => sequence
+            .scored_instants()
+            .into_iter()
+            .map(|t| {
+                spec.scene
+                    .at_time(t)
+                    .with_context(|| format!("{}: posing the scene at {t} s", spec.key()))
+            })
+            .collect(),
+    }
+}
+
 /// Renders the references the shard's runs need and the cache lacks, when the experiment
-/// states a photon budget; returns (rendered, still missing).
+/// states a photon budget; returns (rendered, still missing). A sequence needs one per
+/// scored instant.
 fn ensure_references(
     e: &Experiment,
     runs: &[&RunSpec],
@@ -520,12 +544,24 @@ fn ensure_references(
 ) -> Result<(Vec<String>, Vec<String>)> {
     let mut seen = BTreeSet::new();
     let (mut rendered, mut missing) = (Vec::new(), Vec::new());
-    for spec in runs {
-        let scene = &spec.scene;
-        let label = format!(
-            "{} {}x{}",
-            scene.name, scene.camera.width, scene.camera.height
-        );
+    for (spec, scene) in runs
+        .iter()
+        .map(|spec| Ok((spec, reference_scenes(spec)?)))
+        .collect::<Result<Vec<_>>>()?
+        .into_iter()
+        .flat_map(|(spec, scenes)| scenes.into_iter().map(move |s| (spec, s)))
+    {
+        let scene = &scene;
+        let label = match spec.animate {
+            Some(_) => format!(
+                "{} {}x{} at {} s",
+                scene.name, scene.camera.width, scene.camera.height, scene.time
+            ),
+            None => format!(
+                "{} {}x{}",
+                scene.name, scene.camera.width, scene.camera.height
+            ),
+        };
         // Only for runs that will happen: a method that skips the scene needs none.
         let params = serde_json::Value::Object(spec.params.clone());
         let info = crate::registry::find(&spec.method)?;
@@ -604,9 +640,9 @@ fn ensure_references(
     Ok((rendered, missing))
 }
 
-/// `runs/<params>/<scene>/<method>`: the run folder, relative to the experiment folder.
 /// The manifest of a reproduction killed before it wrote one: a run whose folder holds
-/// its `result.json` (written last of a run's files) is done, every other is not run.
+/// its `result.json` (a sequence's `animation.json`: written last of a run's files) is
+/// done, every other is not run.
 /// The experiment is taken as the one the folder was made from; its runs' own
 /// `result.json` name their scene, method and parameters.
 ///
@@ -617,16 +653,26 @@ fn interrupted_manifest(e: &Experiment, out: &Path, scale: f64) -> Result<Manife
     let mut runs = Vec::new();
     for spec in &e.runs {
         let rel = run_rel(spec);
-        let complete = out.join(&rel).join("result.json").is_file();
+        let file = out.join(&rel).join(run_file(spec));
+        let complete = file.is_file();
         if complete {
-            let r = crate::summary::read_result(&out.join(&rel))?;
+            let made_at = match spec.animate {
+                Some(_) => {
+                    let a = crate::summary::read_sequence(&out.join(&rel))?;
+                    (a.scene.width, a.scene.height)
+                }
+                None => {
+                    let r = crate::summary::read_result(&out.join(&rel))?;
+                    (r.scene.width, r.scene.height)
+                }
+            };
             let (w, h) = (spec.scene.camera.width, spec.scene.camera.height);
-            if (r.scene.width, r.scene.height) != (w, h) {
+            if made_at != (w, h) {
                 bail!(
                     "{}: made at {}x{}, but --scale {scale} gives {}'s run {w}x{h}: pass the --scale the reproduction was made with",
-                    out.join(&rel).join("result.json").display(),
-                    r.scene.width,
-                    r.scene.height,
+                    file.display(),
+                    made_at.0,
+                    made_at.1,
                     spec.key()
                 );
             }
@@ -654,11 +700,27 @@ fn interrupted_manifest(e: &Experiment, out: &Path, scale: f64) -> Result<Manife
     })
 }
 
+/// `runs/<params>/<scene>/<method>`, and its `animation/` for a sequence: the folder of
+/// the run's `result.json` (or `animation.json`), relative to the experiment folder.
 fn run_rel(spec: &RunSpec) -> PathBuf {
-    Path::new("runs")
+    let dir = Path::new("runs")
         .join(&spec.slug)
         .join(&spec.scene.name)
-        .join(&spec.method)
+        .join(&spec.method);
+    if spec.animate.is_some() {
+        dir.join("animation")
+    } else {
+        dir
+    }
+}
+
+/// The file written last of a run: its `result.json`, or a sequence's `animation.json`.
+fn run_file(spec: &RunSpec) -> &'static str {
+    if spec.animate.is_some() {
+        crate::animate::ANIMATION_FILE
+    } else {
+        "result.json"
+    }
 }
 
 fn run_one(e: &Experiment, spec: &RunSpec, args: &ReproduceArgs, out: &Path) -> RunStatus {
@@ -684,7 +746,7 @@ fn run_one(e: &Experiment, spec: &RunSpec, args: &ReproduceArgs, out: &Path) -> 
         resolution: None,
         time: None,
         animate: None,
-        reference_every: None,
+        reference_every: spec.animate.map(|a| a.reference_every()),
         representative_lights: spec.representative_lights.unwrap_or(0),
     };
     let status = |status: &str, dir: Option<String>, reason: Option<String>| RunStatus {
@@ -694,7 +756,11 @@ fn run_one(e: &Experiment, spec: &RunSpec, args: &ReproduceArgs, out: &Path) -> 
         dir,
         reason,
     };
-    match run_scene(&o, spec.scene.clone()) {
+    let outcome = match &spec.animate {
+        Some(a) => crate::animate::run_animated(&o, &a.spec(), spec.scene.clone()),
+        None => run_scene(&o, spec.scene.clone()),
+    };
+    match outcome {
         Ok(RunOutcome::Done { dir, result }) => {
             if !args.keep_exr {
                 crate::resume::drop_exrs(&dir, &result.images);
@@ -703,11 +769,9 @@ fn run_one(e: &Experiment, spec: &RunSpec, args: &ReproduceArgs, out: &Path) -> 
             status("done", Some(rel.display().to_string()), None)
         }
         Ok(RunOutcome::Skipped { reason }) => status("skipped", None, Some(reason)),
-        Ok(RunOutcome::Animated { .. }) => status(
-            "failed",
-            None,
-            Some("an experiment run rendered a sequence; experiments run still instants".into()),
-        ),
+        Ok(RunOutcome::Animated { .. }) => {
+            status("done", Some(run_rel(spec).display().to_string()), None)
+        }
         Err(err) => status("failed", None, Some(crate::error_text(&err))),
     }
 }
@@ -820,7 +884,7 @@ pub fn merge(args: &MergeArgs) -> Result<PathBuf> {
         for r in &m.runs {
             if let Some(rel) = &r.dir {
                 let from = d.join(rel);
-                if !from.join("result.json").is_file() {
+                if !(from.join("result.json").is_file() || crate::summary::is_sequence_dir(&from)) {
                     bail!("{}: missing (listed in its manifest)", from.display());
                 }
             }

@@ -23,6 +23,12 @@
 //!   the two is redone);
 //! - every image its `result.json` lists is there (the EXRs only with `--keep-exr`).
 //!
+//! An animated run (the experiment's `animate`) is a folder `…/animation/` whose
+//! `animation.json` is written last: it is complete when made by the same binary on the
+//! same machine from the same scene (its first instant's hash), resolution, method,
+//! parameters, sequence, scored instants and scoring grid, against the references the
+//! cache holds now for its scored instants, with every image it lists.
+//!
 //! Anything else is redone from an emptied folder.
 
 use std::path::{Path, PathBuf};
@@ -87,8 +93,9 @@ pub struct Expected<'a> {
     /// The experiment's `exposure`.
     pub exposure: Option<f32>,
     /// The reference `caustics run` would score against (as it writes it in
-    /// `errors.reference`), if the cache has one.
-    pub reference: Option<String>,
+    /// `errors.reference`), if the cache has one; for a sequence, one per scored instant
+    /// in time order ([`crate::experiment::Sequence::scored_instants`]).
+    pub references: Vec<Option<String>>,
     /// This binary's build.
     pub build: &'a Build,
     /// This machine's CPU model.
@@ -104,8 +111,8 @@ pub struct Expected<'a> {
 /// Whether a run folder can be kept.
 #[derive(Debug)]
 pub enum Completeness {
-    /// Complete and made from the expected inputs.
-    Complete(Box<RunResult>),
+    /// Complete and made from the expected inputs: its result (none for a sequence).
+    Complete(Option<Box<RunResult>>),
     /// Missing (never run, killed, failed or skipped before).
     Missing,
     /// Present but not what the run would make now: why.
@@ -114,6 +121,9 @@ pub enum Completeness {
 
 /// Decides whether the run folder `dir` holds the run `x` would make.
 pub fn completeness(dir: &Path, x: &Expected<'_>) -> Completeness {
+    if let Some(sequence) = &x.spec.animate {
+        return sequence_completeness(dir, sequence, x);
+    }
     let p = dir.join("result.json");
     if !p.is_file() {
         return Completeness::Missing;
@@ -126,7 +136,99 @@ pub fn completeness(dir: &Path, x: &Expected<'_>) -> Completeness {
         Err(e) => return Completeness::Stale(format!("{}: unreadable ({e})", p.display())),
     };
     match stale_reason(dir, &r, x) {
-        None => Completeness::Complete(Box::new(r)),
+        None => Completeness::Complete(Some(Box::new(r))),
+        Some(why) => Completeness::Stale(format!("{}: {why}", p.display())),
+    }
+}
+
+/// [`completeness`] of an animated run's folder (`animation.json`): the same inputs as a
+/// still run's where a sequence has them (its first instant's scene hash), the sequence
+/// and its scored instants, and each scored instant's reference.
+fn sequence_completeness(
+    dir: &Path,
+    sequence: &crate::experiment::Sequence,
+    x: &Expected<'_>,
+) -> Completeness {
+    let p = dir.join(crate::animate::ANIMATION_FILE);
+    if !p.is_file() {
+        return Completeness::Missing;
+    }
+    let a = match crate::animate::load(&p) {
+        Ok(a) => a,
+        Err(e) => return Completeness::Stale(format!("{}: unreadable ({e:#})", p.display())),
+    };
+    let s = &x.spec.scene;
+    let first_hash = s
+        .at_time(sequence.start_s)
+        .map(|posed| posed.hash_hex())
+        .unwrap_or_default();
+    let want_params = serde_json::Value::Object(x.spec.params.clone());
+    let scored: Vec<&crate::animate::AnimationFrame> =
+        a.frames.iter().filter(|f| f.errors.is_some()).collect();
+    // A scored frame names its reference by its path; the cache key is its tail.
+    let have_refs: Vec<Option<&str>> = scored.iter().map(|f| f.reference.as_deref()).collect();
+    let refs_match = x.references.iter().all(Option::is_some)
+        && have_refs.len() == x.references.len()
+        && have_refs
+            .iter()
+            .zip(&x.references)
+            .all(|(h, w)| matches!((h, w), (Some(h), Some(w)) if h.ends_with(w.as_str())));
+    let refs_absent = x.references.iter().all(Option::is_none) && scored.is_empty();
+    let why = differs(
+        "schema_version",
+        a.schema_version,
+        crate::animate::ANIMATION_SCHEMA_VERSION,
+    )
+    .or_else(|| differs("scene.name", a.scene.name.as_str(), s.name.as_str()))
+    .or_else(|| {
+        differs(
+            "scene.hash (first instant)",
+            a.scene.hash.clone(),
+            first_hash,
+        )
+    })
+    .or_else(|| {
+        differs(
+            "the resolution",
+            (a.scene.width, a.scene.height),
+            (s.camera.width, s.camera.height),
+        )
+    })
+    .or_else(|| {
+        differs(
+            "method.name",
+            a.method.name.as_str(),
+            x.spec.method.as_str(),
+        )
+    })
+    .or_else(|| differs("method.params", &a.method.params, &want_params))
+    .or_else(|| differs("sequence", a.sequence, sequence.spec()))
+    .or_else(|| {
+        differs(
+            "reference_every",
+            a.reference_every,
+            sequence.reference_every(),
+        )
+    })
+    .or_else(|| differs("score_grid", a.score_grid, x.spec.score_grid))
+    .or_else(|| {
+        (!(refs_match || refs_absent)).then(|| {
+            format!(
+                "its scored instants' references are {have_refs:?}, the cache now has {:?}",
+                x.references
+            )
+        })
+    })
+    .or_else(|| build_machine_exe_reason(dir, &a.build, &a.machine, x))
+    .or_else(|| {
+        a.frames
+            .iter()
+            .filter_map(|f| f.image.as_deref())
+            .find(|f| !dir.join(f).is_file())
+            .map(|f| format!("lists image {f}, which is missing"))
+    });
+    match why {
+        None => Completeness::Complete(None),
         Some(why) => Completeness::Stale(format!("{}: {why}", p.display())),
     }
 }
@@ -140,9 +242,6 @@ fn stale_reason(dir: &Path, r: &RunResult, x: &Expected<'_>) -> Option<String> {
     let want_params = serde_json::Value::Object(x.spec.params.clone());
     let source = r.tone_map.source.as_deref();
     let errors_ref = r.errors.as_ref().map(|e| e.reference.as_str());
-    let adapter_ok = x
-        .adapter
-        .is_none_or(|a| r.machine.adapter.to_lowercase().contains(&a.to_lowercase()));
     differs("schema_version", r.schema_version, SCHEMA_VERSION)
         .or_else(|| differs("scene.name", r.scene.name.as_str(), s.name.as_str()))
         .or_else(|| differs("scene.hash", r.scene.hash.clone(), s.hash_hex()))
@@ -179,48 +278,14 @@ fn stale_reason(dir: &Path, r: &RunResult, x: &Expected<'_>) -> Option<String> {
             None => (source == Some("--exposure"))
                 .then(|| "tone_map.source is --exposure, the experiment sets none".to_owned()),
         })
-        .or_else(|| differs("errors.reference", errors_ref, x.reference.as_deref()))
         .or_else(|| {
             differs(
-                "build (commit, dirty, diff hash, version, profile)",
-                (
-                    &r.build.commit,
-                    r.build.dirty,
-                    &r.build.diff_hash,
-                    &r.build.version,
-                    &r.build.profile,
-                ),
-                (
-                    &x.build.commit,
-                    x.build.dirty,
-                    &x.build.diff_hash,
-                    &x.build.version,
-                    &x.build.profile,
-                ),
+                "errors.reference",
+                errors_ref,
+                x.references.first().and_then(Option::as_deref),
             )
         })
-        .or_else(|| differs("machine.cpu", r.machine.cpu.as_str(), x.cpu))
-        .or_else(|| {
-            (!adapter_ok).then(|| {
-                format!(
-                    "machine.adapter is {:?}, the adapter asked for is {:?}",
-                    r.machine.adapter,
-                    x.adapter.unwrap_or_default()
-                )
-            })
-        })
-        .or_else(|| {
-            let want = x.exe?;
-            let p = dir.join(STAMP);
-            let have: Option<ExeStamp> = std::fs::read(&p)
-                .ok()
-                .and_then(|b| serde_json::from_slice(&b).ok());
-            match have {
-                Some(h) if h == *want => None,
-                Some(_) => Some(format!("{STAMP}: made by another build of the executable")),
-                None => Some(format!("{STAMP}: missing or unreadable")),
-            }
-        })
+        .or_else(|| build_machine_exe_reason(dir, &r.build, &r.machine, x))
         .or_else(|| {
             r.images
                 .values()
@@ -228,6 +293,58 @@ fn stale_reason(dir: &Path, r: &RunResult, x: &Expected<'_>) -> Option<String> {
                 .find(|f| !dir.join(f).is_file())
                 .map(|f| format!("lists image {f}, which is missing"))
         })
+}
+
+/// Why a run made by `build` on `machine` into `dir` is not this binary's on this
+/// machine: an experiment folder holds one build's and one machine's timings.
+fn build_machine_exe_reason(
+    dir: &Path,
+    build: &Build,
+    machine: &crate::machine::Machine,
+    x: &Expected<'_>,
+) -> Option<String> {
+    let adapter_ok = x
+        .adapter
+        .is_none_or(|a| machine.adapter.to_lowercase().contains(&a.to_lowercase()));
+    differs(
+        "build (commit, dirty, diff hash, version, profile)",
+        (
+            &build.commit,
+            build.dirty,
+            &build.diff_hash,
+            &build.version,
+            &build.profile,
+        ),
+        (
+            &x.build.commit,
+            x.build.dirty,
+            &x.build.diff_hash,
+            &x.build.version,
+            &x.build.profile,
+        ),
+    )
+    .or_else(|| differs("machine.cpu", machine.cpu.as_str(), x.cpu))
+    .or_else(|| {
+        (!adapter_ok).then(|| {
+            format!(
+                "machine.adapter is {:?}, the adapter asked for is {:?}",
+                machine.adapter,
+                x.adapter.unwrap_or_default()
+            )
+        })
+    })
+    .or_else(|| {
+        let want = x.exe?;
+        let p = dir.join(STAMP);
+        let have: Option<ExeStamp> = std::fs::read(&p)
+            .ok()
+            .and_then(|b| serde_json::from_slice(&b).ok());
+        match have {
+            Some(h) if h == *want => None,
+            Some(_) => Some(format!("{STAMP}: made by another build of the executable")),
+            None => Some(format!("{STAMP}: missing or unreadable")),
+        }
+    })
 }
 
 /// Removes the EXRs `reproduce` does not keep (see [`is_dropped_exr`]): those the run's

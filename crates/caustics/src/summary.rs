@@ -164,6 +164,10 @@ pub struct Row {
     /// The run's CPU wall time by phase (result.json's `wall`).
     #[serde(default)]
     pub wall: Option<crate::result::RunWall>,
+    /// An animated run's sequence (its `animation.json`): GPU times above are over its
+    /// instants, one timed frame each; errors and the temporal error are here.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sequence: Option<crate::animate::SequenceFigures>,
 }
 
 /// A number from the paper beside a run.
@@ -232,7 +236,14 @@ impl Row {
                     .error_measures()
                     .into_iter()
                     .find(|(k, _)| k == m)
-                    .map(|(_, v)| v),
+                    .map(|(_, v)| v)
+                    .or_else(|| {
+                        let s = self.sequence.as_ref()?;
+                        s.measures()
+                            .into_iter()
+                            .find(|(k, _)| *k == m)
+                            .map(|(_, v)| v)
+                    }),
             },
         }
     }
@@ -268,6 +279,17 @@ impl Row {
     }
 }
 
+/// Whether a run folder holds an animated sequence (`animation.json`, `caustics run
+/// --animate`) rather than a still run (`result.json`).
+pub fn is_sequence_dir(dir: &Path) -> bool {
+    dir.join(crate::animate::ANIMATION_FILE).is_file() && !dir.join("result.json").is_file()
+}
+
+/// Reads `<dir>/animation.json`.
+pub fn read_sequence(dir: &Path) -> Result<crate::animate::AnimationResult> {
+    crate::animate::load(&dir.join(crate::animate::ANIMATION_FILE))
+}
+
 /// Reads `<dir>/<rel>/result.json`.
 pub fn read_result(dir: &Path) -> Result<RunResult> {
     let p = dir.join("result.json");
@@ -293,22 +315,34 @@ pub fn build(out: &Path, e: &Experiment, m: &Manifest) -> Result<Summary> {
                     e.file.display()
                 )
             })?;
-        let result = match &st.dir {
-            Some(rel) => Some(read_result(&out.join(rel))?),
-            None => None,
+        let (result, sequence) = match &st.dir {
+            Some(rel) if is_sequence_dir(&out.join(rel)) => {
+                (None, Some(read_sequence(&out.join(rel))?))
+            }
+            Some(rel) => (Some(read_result(&out.join(rel))?), None),
+            None => (None, None),
         };
-        if let Some(r) = &result {
+        let made = result
+            .as_ref()
+            .map(|r| (&r.machine, &r.build))
+            .or(sequence.as_ref().map(|a| (&a.machine, &a.build)));
+        if let Some((machine, b)) = made {
             adapters.push(format!(
                 "{} ({}), CPU {}",
-                r.machine.adapter, r.machine.backend, r.machine.cpu
+                machine.adapter, machine.backend, machine.cpu
             ));
             commits.push(format!(
                 "{}{}",
-                r.build.commit,
-                if r.build.dirty { "+dirty" } else { "" }
+                b.commit,
+                if b.dirty { "+dirty" } else { "" }
             ));
-            profiles.push(r.build.profile.clone());
+            profiles.push(b.profile.clone());
         }
+        // A sequence's timings are over its instants (one timed frame each).
+        let timing = result
+            .as_ref()
+            .map(|r| &r.timing)
+            .or(sequence.as_ref().map(|a| &a.timing));
         let paper = e
             .def
             .paper
@@ -333,12 +367,8 @@ pub fn build(out: &Path, e: &Experiment, m: &Manifest) -> Result<Summary> {
             status: st.status.clone(),
             reason: st.reason.clone(),
             dir: st.dir.clone(),
-            method_gpu_ms: result
-                .as_ref()
-                .and_then(|r| r.timing.method_gpu_ms.as_ref().map(Spread::from)),
-            frame_gpu_ms: result
-                .as_ref()
-                .and_then(|r| r.timing.frame_gpu_ms.as_ref().map(Spread::from)),
+            method_gpu_ms: timing.and_then(|t| t.method_gpu_ms.as_ref().map(Spread::from)),
+            frame_gpu_ms: timing.and_then(|t| t.frame_gpu_ms.as_ref().map(Spread::from)),
             fragments: result
                 .as_ref()
                 .and_then(|r| r.fragments.as_ref().map(|f| f.method_total)),
@@ -381,11 +411,9 @@ pub fn build(out: &Path, e: &Experiment, m: &Manifest) -> Result<Summary> {
                     .and_then(|e| e.reference_noise_rms)
             }),
             paper,
-            pass_gpu_ms: result
-                .as_ref()
-                .map(|r| {
-                    r.timing
-                        .passes
+            pass_gpu_ms: timing
+                .map(|t| {
+                    t.passes
                         .iter()
                         .filter_map(|p| Some((p.name.clone(), Spread::from(p.gpu_ms.as_ref()?))))
                         .collect()
@@ -403,6 +431,7 @@ pub fn build(out: &Path, e: &Experiment, m: &Manifest) -> Result<Summary> {
                 .unwrap_or_default(),
             roofline: result.as_ref().and_then(|r| r.roofline.clone()),
             wall: result.as_ref().and_then(|r| r.wall.clone()),
+            sequence: sequence.as_ref().map(crate::animate::SequenceFigures::of),
         });
     }
     let distinct = |mut v: Vec<String>| {
@@ -465,9 +494,10 @@ pub fn read_summary(dir: &Path) -> Result<Summary> {
         let inside = Path::new(rel)
             .components()
             .all(|c| matches!(c, std::path::Component::Normal(_)));
-        if !inside || !dir.join(rel).join("result.json").is_file() {
+        let run = dir.join(rel);
+        if !inside || !(run.join("result.json").is_file() || is_sequence_dir(&run)) {
             bail!(
-                "{}: runs[{i}].dir: {rel:?} is not a run folder of this experiment (expected a relative path below {} holding a result.json)",
+                "{}: runs[{i}].dir: {rel:?} is not a run folder of this experiment (expected a relative path below {} holding a result.json or an animation.json)",
                 p.display(),
                 dir.display()
             );
@@ -517,6 +547,9 @@ pub fn bmf(s: &Summary) -> serde_json::Value {
         for (name, v) in r.error_measures() {
             single(name, v);
         }
+        for (name, v) in r.sequence.iter().flat_map(|q| q.measures()) {
+            single(name.to_owned(), v);
+        }
         out.insert(format!("{}/{}", s.experiment, r.key), Value::Object(m));
     }
     Value::Object(out)
@@ -541,6 +574,9 @@ fn ms(s: &Option<Spread>) -> String {
         None => "–".into(),
     }
 }
+
+/// What a summary's sequence table means.
+const SEQUENCE_NOTE: &str = "Each frame a new instant: the scene posed, uploaded and the method created anew (its rebuild timed on the CPU apart; pipelines compiled once per sequence), one untimed frame, then the timed one. GPU ms: median (p10–p90) over the instants. Errors: means over the scored instants (every `reference_every`-th and the one after, pixel-averaged scoring frames against references posed at those instants). **Temporal relRMSE**: the method's frame-to-frame change against the reference's, RMS over the scored pairs (flicker that a still error misses), beside the same frames' still relRMSE; **change ratio** Σ Δm² / Σ Δr² (1: the image changes as much as the caustic). Per frame: `animation.md` in the run's folder.\n\n";
 
 /// Short form of a number for tables.
 pub fn num(v: f64) -> String {
@@ -812,11 +848,45 @@ pub fn markdown(s: &Summary, plots: &[String]) -> String {
         let _ = writeln!(md, "|{}", "---|".repeat(cols));
     };
     for g in groups {
-        let rows: Vec<&Row> = s
-            .runs
-            .iter()
-            .filter(|r| r.group == g && r.status == "done")
-            .collect();
+        let done = s.runs.iter().filter(|r| r.group == g && r.status == "done");
+        let sequences: Vec<&Row> = done.clone().filter(|r| r.sequence.is_some()).collect();
+        let rows: Vec<&Row> = done.filter(|r| r.sequence.is_none()).collect();
+        if !sequences.is_empty() {
+            let _ = writeln!(md, "## {g}: animated sequences\n");
+            md.push_str(SEQUENCE_NOTE);
+            head_rule(
+                &mut md,
+                "| scene | method | params | size | frames | method GPU ms | frame GPU ms | rebuild CPU ms | scored | flux | relMSE | HDR-FLIP | temporal relRMSE | still relRMSE | change ratio |",
+            );
+            for r in &sequences {
+                let Some(q) = &r.sequence else { continue };
+                let o = |v: Option<f64>, d: usize| v.map_or("–".into(), |v| format!("{v:.d$}"));
+                let _ = writeln!(
+                    md,
+                    "| {} | {} | {} | {}×{} | {} ({}–{} s, {} FPS) | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+                    r.scene,
+                    r.method,
+                    params_cell(&r.params),
+                    r.width,
+                    r.height,
+                    q.frames,
+                    q.start_s,
+                    q.end_s,
+                    q.fps,
+                    ms(&r.method_gpu_ms),
+                    ms(&r.frame_gpu_ms),
+                    ms(&q.rebuild_ms),
+                    q.scored,
+                    o(q.flux_ratio, 3),
+                    q.rel_mse.map_or("–".into(), |v| format!("{v:.3e}")),
+                    o(q.hdr_flip, 3),
+                    o(q.temporal_rel_rmse, 4),
+                    o(q.still_rel_rmse, 4),
+                    o(q.change_ratio, 3),
+                );
+            }
+            let _ = writeln!(md);
+        }
         if rows.is_empty() {
             continue;
         }
@@ -936,7 +1006,12 @@ fn wall_section(md: &mut String, s: &Summary) {
         .iter()
         .filter_map(|r| Some((r, r.wall.as_ref()?)))
         .collect();
-    if walls.is_empty() && s.rendered_references.is_empty() {
+    let sequences: Vec<(&Row, f64)> = s
+        .runs
+        .iter()
+        .filter_map(|r| Some((r, r.sequence.as_ref()?.wall_s)))
+        .collect();
+    if walls.is_empty() && sequences.is_empty() && s.rendered_references.is_empty() {
         return;
     }
     let _ = writeln!(md, "## Where the time went\n");
@@ -945,6 +1020,22 @@ fn wall_section(md: &mut String, s: &Summary) {
             md,
             "References rendered on the CPU first: {}.\n",
             s.rendered_references.join("; ")
+        );
+    }
+    if !sequences.is_empty() {
+        let all_s: f64 = sequences.iter().map(|(_, w)| w).sum();
+        let _ = writeln!(
+            md,
+            "CPU wall seconds of the {} sequences ({} s in all; references not included; each \
+             instant's rebuild, untimed and timed frames, and the scored instants' scoring \
+             frames): {}.\n",
+            sequences.len(),
+            secs(all_s),
+            sequences
+                .iter()
+                .map(|(r, w)| format!("{} {} {}", r.method, params_cell(&r.params), secs(*w)))
+                .collect::<Vec<_>>()
+                .join(", ")
         );
     }
     if walls.is_empty() {
@@ -1045,6 +1136,7 @@ pub(crate) fn test_row(method: &str) -> Row {
         pass_fragments: Default::default(),
         roofline: None,
         wall: None,
+        sequence: None,
     }
 }
 

@@ -559,3 +559,100 @@ fn the_readmes_copyable_example_loads() {
     assert_eq!(e.runs.len(), 12);
     assert_eq!(e.figures.len(), 5);
 }
+
+#[test]
+fn an_animated_experiment_makes_sequences_a_group_may_stay_still() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let p = write(
+        dir.path(),
+        "anim",
+        r#"{"name": "anim", "resolution": {"width": 32, "height": 24},
+            "animate": {"start_s": 0, "end_s": 1, "fps": 10, "reference_every": 4},
+            "runs": [
+              {"scenes": ["water_pool"], "methods": ["splatting"]},
+              {"label": "still", "scenes": ["water_pool"], "methods": ["wavefront"], "animate": false},
+              {"label": "own", "scenes": ["ring"], "methods": ["wavefront"],
+               "animate": {"start_s": 0.5, "end_s": 0.7, "fps": 10}}
+            ]}"#,
+    );
+    let e = Experiment::load(&p, 1.0).unwrap_or_else(|e| panic!("{e}"));
+    let by_key = |k: &str| {
+        e.runs
+            .iter()
+            .find(|r| r.key() == k)
+            .unwrap_or_else(|| panic!("no run {k}"))
+    };
+    let water = by_key("water_pool/splatting/default")
+        .animate
+        .expect("the experiment's sequence");
+    assert_eq!((water.start_s, water.end_s, water.fps), (0.0, 1.0, 10.0));
+    // Every 4th of 10 instants and the one after: 0, 0.1, 0.4, 0.5, 0.8, 0.9 s.
+    assert_eq!(water.scored_instants().len(), 6);
+    assert!(by_key("water_pool/wavefront/default").animate.is_none());
+    let own = by_key("ring/wavefront/default")
+        .animate
+        .expect("the group's own sequence");
+    // Two instants; a quarter of the sequence rounds up to every frame.
+    assert_eq!(own.spec().frame_count(), 2);
+    assert_eq!(own.reference_every(), 1);
+    assert_eq!(own.scored_instants().len(), 2);
+}
+
+#[test]
+fn bad_sequences_name_the_field() {
+    for (animate, field, says) in [
+        (
+            r#"{"start_s": 1, "end_s": 0.5, "fps": 30}"#,
+            "animate.end_s",
+            "expected END after START",
+        ),
+        (
+            r#"{"start_s": 0, "end_s": 1, "fps": 0}"#,
+            "animate.fps",
+            "expected a rate in (0, 1000]",
+        ),
+        (
+            r#"{"start_s": 0, "end_s": 1, "fps": 30, "reference_every": 0}"#,
+            "animate.reference_every",
+            "expected a positive number of frames",
+        ),
+        (
+            r#"{"start_s": 0, "end_s": 100, "fps": 1000}"#,
+            "animate.end_s",
+            "1..=10000 frames",
+        ),
+    ] {
+        let e = load_err(&format!(
+            r#"{{"name": "x", "animate": {animate},
+                "runs": [{{"scenes": ["ring"], "methods": ["wavefront"]}}]}}"#
+        ));
+        assert!(e.contains(field) && e.contains(says), "{animate}: {e}");
+    }
+    let e = load_err(
+        r#"{"name": "x", "runs": [{"scenes": ["ring"], "methods": ["wavefront"], "animate": true}]}"#,
+    );
+    assert!(
+        e.contains("runs[0].animate") && e.contains("or false"),
+        "{e}"
+    );
+    let e = load_err(
+        r#"{"name": "x", "runs": [{"scenes": ["ring"], "methods": ["wavefront"],
+            "animate": {"start_s": 0, "end_s": 1, "fps": -3}}]}"#,
+    );
+    assert!(e.contains("runs[0].animate.fps"), "{e}");
+    let e = load_err(
+        r#"{"name": "x", "animate": {"start_s": 0, "end_s": 1, "fps": 30, "every": 3},
+            "runs": [{"scenes": ["ring"], "methods": ["wavefront"]}]}"#,
+    );
+    assert!(e.contains("every"), "{e}");
+    // An image grid draws still runs' images.
+    let e = load_err(
+        r#"{"name": "x", "animate": {"start_s": 0, "end_s": 1, "fps": 30},
+            "runs": [{"scenes": ["ring"], "methods": ["wavefront"]}],
+            "figures": [{"name": "g", "kind": "image_grid", "rows": "scene", "cols": "method"}]}"#,
+    );
+    assert!(
+        e.contains("figures[0].kind") && e.contains("image grid"),
+        "{e}"
+    );
+}

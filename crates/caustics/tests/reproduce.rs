@@ -509,3 +509,166 @@ fn a_cached_reference_with_fewer_photons_than_asked_is_rendered_again() {
         "the 100-photon image is still there"
     );
 }
+
+/// An experiment whose runs are animated sequences: a still run beside a sequence.
+const ANIMATED: &str = r#"{
+  "name": "animated",
+  "description": "water_pool moving, 3 instants, 32x24",
+  "resolution": {"width": 32, "height": 24},
+  "frames": 2,
+  "warmup": 0,
+  "score_grid": 2,
+  "reference": {"photons": 200000, "seed": 1, "batches": 4},
+  "animate": {"start_s": 0, "end_s": 0.1, "fps": 30, "reference_every": 2},
+  "runs": [
+    {"label": "moving", "scenes": ["water_pool"], "methods": ["splatting"]},
+    {"label": "still", "scenes": ["water_pool"], "methods": ["caustic-triangles"], "animate": false}
+  ]
+}"#;
+
+#[test]
+fn an_animated_experiment_reproduces_resumes_compares_and_reports_its_sequences() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let t = tmp.path();
+    let exp = t.join("experiments");
+    std::fs::create_dir_all(&exp).expect("mkdir");
+    std::fs::write(exp.join("animated.json"), ANIMATED).expect("write");
+    let a = ReproduceArgs {
+        name: "animated".into(),
+        ..args(t, &exp, "out", None)
+    };
+    let outcome = reproduce(&a).unwrap_or_else(|e| panic!("reproduce: {e:#}"));
+    assert_eq!(outcome.failed, 0);
+    let dir = t.join("out").join("animated");
+    let m = read_manifest(&dir).expect("manifest");
+    let seq = m
+        .runs
+        .iter()
+        .find(|r| r.key == "water_pool/splatting/default")
+        .expect("the sequence's run");
+    assert_eq!(seq.status, "done", "{:?}", seq.reason);
+    let rel = seq.dir.clone().expect("its folder");
+    assert_eq!(rel, "runs/default/water_pool/splatting/animation");
+    // Instants 0 and 1/30 s (every 2nd and the one after), and 2/30 s: three references
+    // of the moving water, the first of which the still run shares.
+    assert_eq!(
+        m.rendered_references.len(),
+        3,
+        "{:?}",
+        m.rendered_references
+    );
+    let anim = caustics::animate::load(&dir.join(&rel).join("animation.json")).expect("load");
+    assert_eq!(anim.frames.len(), 3);
+    assert_eq!(anim.frames.iter().filter(|f| f.errors.is_some()).count(), 3);
+    assert_eq!(anim.temporal.len(), 1, "one scored pair: 0 and 1/30 s");
+
+    let s = read_summary(&dir).expect("summary");
+    let row = s
+        .runs
+        .iter()
+        .find(|r| r.key == "water_pool/splatting/default")
+        .expect("row");
+    let q = row.sequence.as_ref().expect("the row's sequence figures");
+    assert_eq!((q.frames, q.scored, q.reference_every), (3, 3, 2));
+    assert!(
+        q.temporal_rel_rmse
+            .is_some_and(|v| v.is_finite() && v > 0.0)
+    );
+    assert!(
+        q.flux_ratio.is_some_and(|f| (0.5..2.0).contains(&f)),
+        "{q:?}"
+    );
+    assert_eq!(
+        row.method_gpu_ms.map(|g| g.median),
+        anim.timing.method_gpu_ms.as_ref().map(|g| g.median),
+        "the row's GPU ms are the sequence's, over its instants"
+    );
+    let still = s
+        .runs
+        .iter()
+        .find(|r| r.key == "water_pool/caustic-triangles/default")
+        .expect("still row");
+    assert!(still.sequence.is_none() && still.errors.is_some());
+    let md = std::fs::read_to_string(dir.join("summary.md")).expect("summary.md");
+    assert!(md.contains("## moving: animated sequences"), "{md}");
+    assert!(md.contains("## still"), "{md}");
+    let bmf: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("bmf.json")).expect("bmf")).expect("json");
+    assert!(
+        bmf["animated/water_pool/splatting/default"]["temporal_rel_rmse"]["value"].is_number(),
+        "{bmf}"
+    );
+
+    // The same command again keeps both runs: the sequence is not rendered again.
+    let before = std::fs::read(dir.join(&rel).join("animation.json")).expect("read");
+    reproduce(&a).unwrap_or_else(|e| panic!("resume: {e:#}"));
+    assert_eq!(
+        std::fs::read(dir.join(&rel).join("animation.json")).expect("read"),
+        before,
+        "a complete sequence is kept"
+    );
+    // A scored instant whose reference left the cache makes the sequence stale: made
+    // again, that instant unscored (the experiment may not render references here).
+    let refs = t.join("references").join("water_pool");
+    let third = anim.frames[2].reference.clone().expect("scored");
+    let gone = std::fs::read_dir(&refs)
+        .expect("references")
+        .flatten()
+        .map(|e| e.path())
+        .find(|p| third.contains(&*p.file_name().unwrap_or_default().to_string_lossy()))
+        .expect("the reference of the third instant");
+    std::fs::remove_dir_all(&gone).expect("drop it");
+    let no_refs = ReproduceArgs {
+        no_render_references: true,
+        ..a.clone()
+    };
+    reproduce(&no_refs).unwrap_or_else(|e| panic!("redo: {e:#}"));
+    let redone = caustics::animate::load(&dir.join(&rel).join("animation.json")).expect("load");
+    assert_eq!(
+        redone.frames.iter().filter(|f| f.errors.is_some()).count(),
+        2,
+        "made again without the third instant's reference"
+    );
+    // Its errors at the other instants are those of the first making.
+    assert_eq!(
+        redone.frames[1].errors.map(|e| e.rel_mse),
+        anim.frames[1].errors.map(|e| e.rel_mse)
+    );
+
+    // compare pairs the sequence (and the still run) with itself: nothing changed.
+    let report = compare(&CompareArgs {
+        base: dir.clone(),
+        new: dir.clone(),
+        time_threshold: 0.05,
+        alpha: 0.01,
+        count_tolerance: 0.0,
+        error_tolerance: 0.0,
+        noise_k: 0.0,
+        no_timings: true,
+        verbose: false,
+        wide: false,
+        across_adapters: false,
+        html: None,
+    })
+    .expect("compare");
+    assert_eq!(report.regressions(), 0, "{}", report.table(true));
+    assert!(
+        report.lines.iter().any(|l| l.run.contains("animation")),
+        "{}",
+        report.table(true)
+    );
+
+    // The report shows the sequence with its scored instants' images.
+    let index = caustics::report::report(&caustics::report::ReportArgs {
+        dir: dir.clone(),
+        out: Some(t.join("report")),
+        references: t.join("references"),
+    })
+    .expect("report");
+    let html = std::fs::read_to_string(index).expect("index");
+    assert!(html.contains("moving: animated sequences"), "report");
+    assert!(
+        html.contains("caustic_t0.033.png"),
+        "the scored instants' images"
+    );
+}
