@@ -125,10 +125,28 @@ fn one_round() -> u32 {
     1
 }
 
-/// The record file of an adapter: its name and driver version, as a file name.
+/// The record file of an adapter: its name and driver version, as a file name; for a
+/// software adapter (lavapipe: `device_type` `Cpu`) also the CPU model and threads, since
+/// its ceilings are the CPU's.
 pub fn record_path(dir: &Path, machine: &Machine) -> PathBuf {
-    let slug: String = format!("{} {}", machine.adapter, machine.driver_info)
-        .chars()
+    let mut name = format!("{} {}", machine.adapter, machine.driver_info);
+    if is_cpu(machine) {
+        name = format!("{name} {} {} threads", machine.cpu, machine.cpu_threads);
+    }
+    dir.join(format!("{}.json", slug(&name)))
+}
+
+/// The record file of an adapter as named before software adapters were keyed by CPU
+/// (adapter and driver only), read when it was measured on this CPU.
+fn legacy_record_path(dir: &Path, machine: &Machine) -> PathBuf {
+    dir.join(format!(
+        "{}.json",
+        slug(&format!("{} {}", machine.adapter, machine.driver_info))
+    ))
+}
+
+fn slug(text: &str) -> String {
+    text.chars()
         .map(|c| {
             if c.is_ascii_alphanumeric() {
                 c.to_ascii_lowercase()
@@ -140,8 +158,34 @@ pub fn record_path(dir: &Path, machine: &Machine) -> PathBuf {
         .split('-')
         .filter(|s| !s.is_empty())
         .collect::<Vec<_>>()
-        .join("-");
-    dir.join(format!("{slug}.json"))
+        .join("-")
+}
+
+fn is_cpu(machine: &Machine) -> bool {
+    machine.device_type == "Cpu"
+}
+
+/// Why a record measured on `measured` does not give `machine`'s ceilings, if it does
+/// not: another adapter or driver, or for a software adapter another CPU or thread count.
+pub fn mismatch(measured: &Machine, machine: &Machine) -> Option<String> {
+    if (measured.adapter.as_str(), measured.driver_info.as_str())
+        != (machine.adapter.as_str(), machine.driver_info.as_str())
+    {
+        return Some(format!(
+            "measured on {} ({}), this run is on {} ({})",
+            measured.adapter, measured.driver_info, machine.adapter, machine.driver_info
+        ));
+    }
+    if is_cpu(machine)
+        && (measured.cpu.as_str(), measured.cpu_threads)
+            != (machine.cpu.as_str(), machine.cpu_threads)
+    {
+        return Some(format!(
+            "a software adapter's ceilings are its CPU's: measured on {} ({} threads), this run is on {} ({} threads)",
+            measured.cpu, measured.cpu_threads, machine.cpu, machine.cpu_threads
+        ));
+    }
+    None
 }
 
 /// Reads and checks a ceilings record: it must parse, have this layout version, and
@@ -178,14 +222,25 @@ pub fn load(path: &Path) -> Result<CeilingsRecord> {
     Ok(record)
 }
 
-/// The cached record of `machine`'s adapter under `dir`, if one was measured: `None`
-/// when there is none, an error when there is one that cannot be read.
-pub fn cached(dir: &Path, machine: &Machine) -> Result<Option<CeilingsRecord>> {
-    let path = record_path(dir, machine);
-    if !path.exists() {
+/// The cached record of `machine`'s adapter under `dir` and its path, if one was
+/// measured for it: `None` when there is none (or only one of another CPU, for a software
+/// adapter: said on stderr), an error when there is one that cannot be read.
+pub fn cached(dir: &Path, machine: &Machine) -> Result<Option<(CeilingsRecord, PathBuf)>> {
+    let path = [record_path(dir, machine), legacy_record_path(dir, machine)]
+        .into_iter()
+        .find(|p| p.exists());
+    let Some(path) = path else {
+        return Ok(None);
+    };
+    let record = load(&path)?;
+    if let Some(why) = mismatch(&record.machine, machine) {
+        eprintln!(
+            "note: ceilings record {} not used ({why}); `caustics ceilings` measures this machine's",
+            path.display()
+        );
         return Ok(None);
     }
-    load(&path).map(Some)
+    Ok(Some((record, path)))
 }
 
 /// Measures the ceilings and writes the record (atomically, over an earlier one of the
@@ -351,12 +406,86 @@ mod tests {
     }
 
     #[test]
-    fn the_record_file_is_named_after_adapter_and_driver() {
+    fn the_record_file_is_named_after_adapter_and_driver_and_a_software_adapters_cpu() {
         let p = record_path(Path::new("c"), &machine());
         assert_eq!(
             p,
-            Path::new("c/llvmpipe-llvm-15-0-6-256-bits-mesa-22-3-6-llvm-15-0-6.json")
+            Path::new("c/llvmpipe-llvm-15-0-6-256-bits-mesa-22-3-6-llvm-15-0-6-x-2-threads.json")
         );
+        let gpu = Machine {
+            adapter: "NVIDIA H100 80GB HBM3".into(),
+            device_type: "DiscreteGpu".into(),
+            driver_info: "580.159.04".into(),
+            ..machine()
+        };
+        assert_eq!(
+            record_path(Path::new("c"), &gpu),
+            Path::new("c/nvidia-h100-80gb-hbm3-580-159-04.json")
+        );
+    }
+
+    #[test]
+    fn a_software_adapters_record_of_another_cpu_is_not_used() {
+        let here = machine();
+        let other_cpu = Machine {
+            cpu: "AMD EPYC".into(),
+            ..machine()
+        };
+        let more_threads = Machine {
+            cpu_threads: 16,
+            ..machine()
+        };
+        assert!(mismatch(&here, &here).is_none());
+        let why = mismatch(&other_cpu, &here).expect("another CPU");
+        assert!(why.contains("AMD EPYC") && why.contains("CPU"), "{why}");
+        assert!(mismatch(&more_threads, &here).is_some());
+        // A GPU's ceilings do not depend on the host CPU.
+        let gpu = |cpu: &str| Machine {
+            device_type: "DiscreteGpu".into(),
+            cpu: cpu.into(),
+            ..machine()
+        };
+        assert!(mismatch(&gpu("a"), &gpu("b")).is_none());
+        let driver = Machine {
+            driver_info: "Mesa 24".into(),
+            ..machine()
+        };
+        assert!(mismatch(&driver, &here).is_some());
+
+        // On disk: a record under the old name (adapter and driver only) is read on the
+        // CPU that measured it, not on another; one under the new name likewise.
+        let dir = tempfile::tempdir().expect("temp dir");
+        let record = |m: Machine| CeilingsRecord {
+            schema_version: CEILINGS_SCHEMA_VERSION,
+            build: Build {
+                commit: "c".into(),
+                dirty: false,
+                diff_hash: None,
+                version: "0".into(),
+                profile: "release".into(),
+            },
+            machine: m,
+            width: 64,
+            height: 64,
+            trials: 1,
+            rounds: 1,
+            target_ms: 1.0,
+            ceilings: Vec::new(),
+        };
+        let legacy = legacy_record_path(dir.path(), &here);
+        let json = serde_json::to_vec(&record(other_cpu.clone())).expect("json");
+        std::fs::write(&legacy, json).expect("write");
+        assert!(cached(dir.path(), &here).expect("readable").is_none());
+        let (_, path) = cached(dir.path(), &other_cpu)
+            .expect("readable")
+            .expect("its own CPU's record");
+        assert_eq!(path, legacy);
+        let json = serde_json::to_vec(&record(here.clone())).expect("json");
+        std::fs::write(record_path(dir.path(), &here), json).expect("write");
+        let (_, path) = cached(dir.path(), &here)
+            .expect("readable")
+            .expect("this CPU's record");
+        assert_eq!(path, record_path(dir.path(), &here));
     }
 
     #[test]

@@ -75,7 +75,7 @@ pub fn for_run(
     if !timing.timestamps_available {
         return Ok(None);
     }
-    let Some(record) = ceilings_cmd::cached(ceilings_dir, machine)? else {
+    let Some((record, record_path)) = ceilings_cmd::cached(ceilings_dir, machine)? else {
         return Ok(None);
     };
     let ceilings = model_ceilings(&record);
@@ -93,7 +93,7 @@ pub fn for_run(
         .filter_map(|w| pass_roofline(w, &ceilings))
         .collect();
     Ok(Some(RooflineReport {
-        ceilings: crate::machine::portable_path(&ceilings_cmd::record_path(ceilings_dir, machine)),
+        ceilings: crate::machine::portable_path(&record_path),
         ceilings_build: format!(
             "{}{}",
             record
