@@ -273,6 +273,24 @@ impl SequenceFigures {
         }
     }
 
+    /// Table cells of the sequence and its errors, as every sequence table shows them:
+    /// frames (span, rate), flux, relMSE, HDR-FLIP, temporal relRMSE, still relRMSE,
+    /// change ratio.
+    pub fn cells(&self) -> [String; 7] {
+        [
+            format!(
+                "{} ({}–{} s, {} FPS)",
+                self.frames, self.start_s, self.end_s, self.fps
+            ),
+            opt(self.flux_ratio, 3),
+            self.rel_mse.map_or("–".into(), |v| format!("{v:.3e}")),
+            opt(self.hdr_flip, 3),
+            opt(self.temporal_rel_rmse, 4),
+            opt(self.still_rel_rmse, 4),
+            opt(self.change_ratio, 3),
+        ]
+    }
+
     /// The figures by their `bmf.json` measure names (finite ones only).
     pub fn measures(&self) -> Vec<(&'static str, f64)> {
         [
@@ -725,26 +743,18 @@ pub fn side_by_side(all: &[AnimationResult]) -> String {
             serde_json::Value::Object(m) if m.is_empty() => "defaults".to_owned(),
             p => p.to_string(),
         };
+        let [frames, errors @ ..] = f.cells();
         let _ = writeln!(
             s,
-            "| {} | {} | {} | {} ({}–{} s, {} FPS) | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+            "| {} | {} | {} | {frames} | {} | {} | {} | {} | {} |",
             r.scene.name,
             r.method.name,
             params,
-            f.frames,
-            f.start_s,
-            f.end_s,
-            f.fps,
             r.machine.adapter,
             median(&r.timing.method_gpu_ms),
             median(&r.timing.frame_gpu_ms),
             median(&r.rebuild_ms),
-            opt(f.flux_ratio, 3),
-            f.rel_mse.map_or("–".into(), |v| format!("{v:.3e}")),
-            opt(f.hdr_flip, 3),
-            opt(f.temporal_rel_rmse, 4),
-            opt(f.still_rel_rmse, 4),
-            opt(f.change_ratio, 3),
+            errors.join(" | "),
         );
     }
     s

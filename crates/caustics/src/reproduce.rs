@@ -162,6 +162,52 @@ pub struct Outcome {
     pub dirs: Vec<PathBuf>,
     /// Runs that failed (the rest were written).
     pub failed: usize,
+    /// Where each experiment's time went (not for `--summary-only`).
+    pub times: Vec<ExperimentTime>,
+}
+
+/// The wall time of one experiment of a reproduction.
+#[derive(Clone, Debug)]
+pub struct ExperimentTime {
+    /// Experiment name.
+    pub experiment: String,
+    /// Runs of this shard.
+    pub runs: usize,
+    /// Runs kept from an earlier reproduction (not made again).
+    pub kept: usize,
+    /// Seconds rendering references.
+    pub references_s: f64,
+    /// Seconds in all (references, runs, summary).
+    pub total_s: f64,
+}
+
+/// The table `reproduce` prints after more than one experiment: each one's share of the
+/// whole, references apart, slowest first.
+pub fn time_table(times: &[ExperimentTime]) -> String {
+    use std::fmt::Write as _;
+    let all_s: f64 = times.iter().map(|t| t.total_s).sum();
+    let refs_s: f64 = times.iter().map(|t| t.references_s).sum();
+    let mut out = format!(
+        "{} experiments in {all_s:.0} s ({:.1} min; references {refs_s:.0} s):\n\n| experiment | runs | kept | references s | runs and summary s | total s | share |\n|---|---|---|---|---|---|---|\n",
+        times.len(),
+        all_s / 60.0
+    );
+    let mut sorted: Vec<&ExperimentTime> = times.iter().collect();
+    sorted.sort_by(|a, b| b.total_s.total_cmp(&a.total_s));
+    for t in sorted {
+        let _ = writeln!(
+            out,
+            "| {} | {} | {} | {:.0} | {:.0} | {:.0} | {:.0}% |",
+            t.experiment,
+            t.runs,
+            t.kept,
+            t.references_s,
+            t.total_s - t.references_s,
+            t.total_s,
+            100.0 * t.total_s / all_s.max(f64::MIN_POSITIVE)
+        );
+    }
+    out
 }
 
 fn bar(len: u64, what: &str) -> ProgressBar {
@@ -190,6 +236,7 @@ pub fn reproduce(args: &ReproduceArgs) -> Result<Outcome> {
     let mut outcome = Outcome {
         dirs: Vec::new(),
         failed: 0,
+        times: Vec::new(),
     };
     for e in &experiments {
         let out = args.out.join(&e.def.name);
@@ -240,9 +287,13 @@ pub fn reproduce(args: &ReproduceArgs) -> Result<Outcome> {
             continue;
         }
         refuse_dirty_into_committed(&out, args.allow_dirty)?;
-        let failed = reproduce_one(e, args, shard.unwrap_or((1, 1)), &out)?;
+        let (failed, time) = reproduce_one(e, args, shard.unwrap_or((1, 1)), &out)?;
         outcome.failed += failed;
+        outcome.times.push(time);
         outcome.dirs.push(out);
+    }
+    if outcome.times.len() > 1 {
+        eprintln!("\n{}", time_table(&outcome.times));
     }
     Ok(outcome)
 }
@@ -269,7 +320,7 @@ fn reproduce_one(
     args: &ReproduceArgs,
     (k, n): (usize, usize),
     out: &Path,
-) -> Result<usize> {
+) -> Result<(usize, ExperimentTime)> {
     let runs = e.shard(k, n);
     let start = Instant::now();
     eprintln!(
@@ -298,7 +349,9 @@ fn reproduce_one(
             out.display()
         );
     }
+    let references_started = Instant::now();
     let (rendered, missing) = ensure_references(e, &runs, args)?;
+    let references_s = references_started.elapsed().as_secs_f64();
     crate::resume::mark_unfinished(out)?;
     let build = crate::machine::build();
     let cpu = crate::machine::cpu_model();
@@ -436,7 +489,16 @@ fn reproduce_one(
         start.elapsed().as_secs_f64(),
         out.join("summary.md").display()
     );
-    Ok(failed)
+    Ok((
+        failed,
+        ExperimentTime {
+            experiment: e.def.name.clone(),
+            runs: runs.len(),
+            kept,
+            references_s,
+            total_s: start.elapsed().as_secs_f64(),
+        },
+    ))
 }
 
 fn write_manifest(out: &Path, m: &Manifest) -> Result<()> {
@@ -946,4 +1008,32 @@ fn copy_dir(from: &Path, to: &Path) -> Result<()> {
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_time_table_lists_experiments_slowest_first_with_their_share() {
+        let t = |experiment: &str, references_s: f64, total_s: f64| ExperimentTime {
+            experiment: experiment.into(),
+            runs: 3,
+            kept: 1,
+            references_s,
+            total_s,
+        };
+        let table = time_table(&[t("quick", 0.0, 100.0), t("slow", 60.0, 300.0)]);
+        assert!(
+            table.starts_with("2 experiments in 400 s (6.7 min; references 60 s)"),
+            "{table}"
+        );
+        let slow = table
+            .find("| slow | 3 | 1 | 60 | 240 | 300 | 75% |")
+            .expect(&table);
+        let quick = table
+            .find("| quick | 3 | 1 | 0 | 100 | 100 | 25% |")
+            .expect(&table);
+        assert!(slow < quick, "slowest first:\n{table}");
+    }
 }

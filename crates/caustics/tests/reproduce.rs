@@ -539,6 +539,15 @@ fn an_animated_experiment_reproduces_resumes_compares_and_reports_its_sequences(
     };
     let outcome = reproduce(&a).unwrap_or_else(|e| panic!("reproduce: {e:#}"));
     assert_eq!(outcome.failed, 0);
+    // Where its time went: three references, then two runs.
+    let [time] = outcome.times.as_slice() else {
+        panic!("one experiment's time: {:?}", outcome.times)
+    };
+    assert_eq!((time.runs, time.kept), (2, 0));
+    assert!(
+        time.references_s > 0.0 && time.total_s > time.references_s,
+        "{time:?}"
+    );
     let dir = t.join("out").join("animated");
     let m = read_manifest(&dir).expect("manifest");
     let seq = m
