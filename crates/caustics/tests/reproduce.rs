@@ -644,6 +644,23 @@ fn an_animated_experiment_reproduces_resumes_compares_and_reports_its_sequences(
         anim.frames[1].errors.map(|e| e.rel_mse)
     );
 
+    // A reproduction killed before its manifest: --summary-only finds the sequence done.
+    std::fs::remove_file(dir.join("manifest.json")).expect("drop the manifest");
+    reproduce(&ReproduceArgs {
+        summary_only: true,
+        ..a.clone()
+    })
+    .unwrap_or_else(|e| panic!("summary only: {e:#}"));
+    let m = read_manifest(&dir).expect("manifest written from the runs");
+    assert!(m.runs.iter().all(|r| r.status == "done"), "{:?}", m.runs);
+    assert!(
+        read_summary(&dir)
+            .expect("summary")
+            .runs
+            .iter()
+            .any(|r| r.sequence.is_some())
+    );
+
     // compare pairs the sequence (and the still run) with itself: nothing changed.
     let report = compare(&CompareArgs {
         base: dir.clone(),
