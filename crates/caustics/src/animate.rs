@@ -145,10 +145,18 @@ impl AnimateSpec {
     /// sequence needs.
     pub fn scored_instants(&self, reference_every: u32) -> Vec<f32> {
         let instants = self.instants();
-        scored_indices(instants.len(), reference_every.max(1) as usize)
+        self.scored_frames(reference_every)
+            .into_iter()
+            .map(|i| instants[i])
+            .collect()
+    }
+
+    /// The frame indices of [`AnimateSpec::scored_instants`].
+    pub fn scored_frames(&self, reference_every: u32) -> Vec<usize> {
+        scored_indices(self.frame_count(), reference_every.max(1) as usize)
             .into_iter()
             .filter(|&(_, scored)| scored)
-            .map(|(i, _)| instants[i])
+            .map(|(i, _)| i)
             .collect()
     }
 
@@ -193,6 +201,11 @@ pub struct AnimationResult {
     pub reference_every: u32,
     /// N of the N×N sub-pixel grid of the scored instants' scoring frames.
     pub score_grid: u32,
+    /// The one exposure of the scored instants' PNGs and LDR FLIP: `--exposure`, else the
+    /// first scored reference's 99th percentile (absent without a scored instant, and in
+    /// files before it was recorded).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tone_map: Option<crate::result::ToneMapInfo>,
     /// Every frame, in time order.
     pub frames: Vec<AnimationFrame>,
     /// Per-pass GPU times over the sequence's timed frames (one per instant).
@@ -576,6 +589,18 @@ pub fn run_animated(o: &RunOptions, spec: &AnimateSpec, scene: Scene) -> Result<
         sequence: *spec,
         reference_every: every as u32,
         score_grid: o.score_grid,
+        tone_map: tone.map(|t| crate::result::ToneMapInfo {
+            exposure_scale: t.exposure_scale,
+            source: Some(
+                if o.exposure.is_some() {
+                    "--exposure"
+                } else {
+                    "reference p99"
+                }
+                .into(),
+            ),
+            volume_exposure_scale: None,
+        }),
         timing: crate::run::timing(&samples, has_timestamps, &o.method),
         rebuild_ms: summarize(&rebuild),
         temporal_rel_rmse: rms(&|p| p.error.temporal_rel_rmse),

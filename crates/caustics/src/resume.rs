@@ -163,17 +163,24 @@ fn sequence_completeness(
         .map(|posed| posed.hash_hex())
         .unwrap_or_default();
     let want_params = serde_json::Value::Object(x.spec.params.clone());
-    let scored: Vec<&crate::animate::AnimationFrame> =
-        a.frames.iter().filter(|f| f.errors.is_some()).collect();
-    // A scored frame names its reference by its path; the cache key is its tail.
-    let have_refs: Vec<Option<&str>> = scored.iter().map(|f| f.reference.as_deref()).collect();
-    let refs_match = x.references.iter().all(Option::is_some)
-        && have_refs.len() == x.references.len()
+    // Each scored instant was scored exactly when the cache has its reference now, and
+    // against that one (a frame names its reference by its path; the key is its tail).
+    let have_refs: Vec<Option<&str>> = sequence
+        .spec()
+        .scored_frames(sequence.reference_every())
+        .into_iter()
+        .map(|i| a.frames.get(i).and_then(|f| f.reference.as_deref()))
+        .collect();
+    let refs_match = have_refs.len() == x.references.len()
         && have_refs
             .iter()
             .zip(&x.references)
-            .all(|(h, w)| matches!((h, w), (Some(h), Some(w)) if h.ends_with(w.as_str())));
-    let refs_absent = x.references.iter().all(Option::is_none) && scored.is_empty();
+            .all(|(h, w)| match (h, w) {
+                (Some(h), Some(w)) => h.ends_with(w.as_str()),
+                (None, None) => true,
+                _ => false,
+            });
+    let source = a.tone_map.as_ref().and_then(|t| t.source.as_deref());
     let why = differs(
         "schema_version",
         a.schema_version,
@@ -212,12 +219,23 @@ fn sequence_completeness(
     })
     .or_else(|| differs("score_grid", a.score_grid, x.spec.score_grid))
     .or_else(|| {
-        (!(refs_match || refs_absent)).then(|| {
+        (!refs_match).then(|| {
             format!(
                 "its scored instants' references are {have_refs:?}, the cache now has {:?}",
                 x.references
             )
         })
+    })
+    .or_else(|| match (x.exposure, &a.tone_map) {
+        // No scored instant: no image, no LDR figure.
+        (_, None) => None,
+        (Some(e), Some(t)) => differs(
+            "tone_map (source, exposure_scale)",
+            (source, t.exposure_scale),
+            (Some("--exposure"), e),
+        ),
+        (None, Some(_)) => (source == Some("--exposure"))
+            .then(|| "tone_map.source is --exposure, the experiment sets none".to_owned()),
     })
     .or_else(|| build_machine_exe_reason(dir, &a.build, &a.machine, x))
     .or_else(|| {

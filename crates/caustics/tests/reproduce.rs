@@ -643,6 +643,37 @@ fn an_animated_experiment_reproduces_resumes_compares_and_reports_its_sequences(
         redone.frames[1].errors.map(|e| e.rel_mse),
         anim.frames[1].errors.map(|e| e.rel_mse)
     );
+    assert_eq!(
+        redone.tone_map.as_ref().and_then(|t| t.source.as_deref()),
+        Some("reference p99")
+    );
+    // That sequence matches the cache as it is now: kept.
+    let before = std::fs::read(dir.join(&rel).join("animation.json")).expect("read");
+    reproduce(&no_refs).unwrap_or_else(|e| panic!("resume: {e:#}"));
+    assert_eq!(
+        std::fs::read(dir.join(&rel).join("animation.json")).expect("read"),
+        before,
+        "a sequence scored at the instants whose references the cache has is kept"
+    );
+    // An exposure set in the file makes it stale: made again at that exposure.
+    std::fs::write(
+        exp.join("animated.json"),
+        ANIMATED.replace(
+            "\"score_grid\": 2,",
+            "\"score_grid\": 2, \"exposure\": 2.0,",
+        ),
+    )
+    .expect("write");
+    reproduce(&no_refs).unwrap_or_else(|e| panic!("exposure: {e:#}"));
+    let exposed = caustics::animate::load(&dir.join(&rel).join("animation.json")).expect("load");
+    let tone = exposed
+        .tone_map
+        .expect("a scored sequence records its exposure");
+    assert_eq!(
+        (tone.source.as_deref(), tone.exposure_scale),
+        (Some("--exposure"), 2.0)
+    );
+    std::fs::write(exp.join("animated.json"), ANIMATED).expect("write");
 
     // A reproduction killed before its manifest: --summary-only finds the sequence done.
     std::fs::remove_file(dir.join("manifest.json")).expect("drop the manifest");
