@@ -54,6 +54,25 @@ fn args(tmp: &Path, exp: &Path, out: &str, shard: Option<&str>) -> ReproduceArgs
     }
 }
 
+/// `caustics compare BASE NEW --no-timings` with no tolerance on counts and errors.
+fn strict_compare(base: &Path, new: &Path) -> caustics::compare::Report {
+    compare(&CompareArgs {
+        base: base.to_path_buf(),
+        new: new.to_path_buf(),
+        time_threshold: 0.05,
+        alpha: 0.01,
+        count_tolerance: 0.0,
+        error_tolerance: 0.0,
+        noise_k: 0.0,
+        no_timings: true,
+        verbose: false,
+        wide: false,
+        across_adapters: false,
+        html: None,
+    })
+    .expect("compare")
+}
+
 /// Everything in the summary but the timings (GPU and wall), machine and build.
 fn deterministic(dir: &Path) -> Vec<serde_json::Value> {
     let s = read_summary(dir).expect("summary");
@@ -341,21 +360,7 @@ fn reproduce_then_shards_merged_equal_the_unsharded_run() {
     .expect("merge");
     assert_eq!(deterministic(&dir), deterministic(&merged));
     // And run by run, counts and errors are identical.
-    let report = compare(&CompareArgs {
-        base: dir.clone(),
-        new: merged.clone(),
-        time_threshold: 0.05,
-        alpha: 0.01,
-        count_tolerance: 0.0,
-        error_tolerance: 0.0,
-        noise_k: 0.0,
-        no_timings: true,
-        verbose: false,
-        wide: false,
-        across_adapters: false,
-        html: None,
-    })
-    .expect("compare");
+    let report = strict_compare(&dir, &merged);
     assert_eq!(report.regressions(), 0, "{}", report.table(true));
     assert_eq!(report.runs, 7);
 
@@ -693,21 +698,7 @@ fn an_animated_experiment_reproduces_resumes_compares_and_reports_its_sequences(
     );
 
     // compare pairs the sequence (and the still run) with itself: nothing changed.
-    let report = compare(&CompareArgs {
-        base: dir.clone(),
-        new: dir.clone(),
-        time_threshold: 0.05,
-        alpha: 0.01,
-        count_tolerance: 0.0,
-        error_tolerance: 0.0,
-        noise_k: 0.0,
-        no_timings: true,
-        verbose: false,
-        wide: false,
-        across_adapters: false,
-        html: None,
-    })
-    .expect("compare");
+    let report = strict_compare(&dir, &dir);
     assert_eq!(report.regressions(), 0, "{}", report.table(true));
     assert!(
         report.lines.iter().any(|l| l.run.contains("animation")),
