@@ -350,7 +350,7 @@ mod tests {
             }
         );
         assert_wgsl_layout!(
-            rasterize_source(),
+            rasterize_source(false),
             BeamRecord as "Beam" {
                 v,
                 d,

@@ -157,12 +157,45 @@ pub fn generate_source() -> String {
     ))
 }
 
-/// Hull rasterization with the per-fragment beam intersection.
-pub fn rasterize_source() -> String {
+/// Hull rasterization with the per-fragment beam intersection; `depth_culled`: with
+/// the fragment shader's depth test forced before it runs (`@early_depth_test(force)`,
+/// [`wgpu::Features::SHADER_EARLY_DEPTH_TEST`]), for the depth-culled pass of a scene
+/// without a medium ([`HullRaster`]).
+pub fn rasterize_source(depth_culled: bool) -> String {
+    let fragment = if depth_culled {
+        "@fragment @early_depth_test(force)"
+    } else {
+        "@fragment"
+    };
     shader::compose_method(&format!(
-        "{}\n{BEAM_SHADING_WGSL}\n{RASTERIZE_WGSL}",
-        types_wgsl()
+        "{}\n{BEAM_SHADING_WGSL}\n{}",
+        types_wgsl(),
+        RASTERIZE_WGSL.replace(RASTERIZE_FRAGMENT_ATTRIBUTE, fragment)
     ))
+}
+
+/// The attribute line of `fs_beam` in rasterize.wgsl, where [`rasterize_source`] forces
+/// the early depth test.
+const RASTERIZE_FRAGMENT_ATTRIBUTE: &str = "@fragment // fs_beam";
+
+/// The depth test of the depth-culled hull pass: a back-face fragment passes at or
+/// behind the visible surface. Read-only. The bias moves the hull's depth back by a few
+/// depth units (more on faces seen edge-on), so that a visible point on the hull's
+/// boundary (a receiver in the plane of the beam's far cap, a point on a side face)
+/// is never rejected by rounding: the test may keep a fragment that lights nothing,
+/// never drop one that lights something.
+fn hull_depth_cull_state() -> wgpu::DepthStencilState {
+    wgpu::DepthStencilState {
+        format: caustics_gpu::textures::DEPTH_FORMAT,
+        depth_write_enabled: Some(false),
+        depth_compare: Some(wgpu::CompareFunction::GreaterEqual),
+        stencil: Default::default(),
+        bias: wgpu::DepthBiasState {
+            constant: 16,
+            slope_scale: 2.0,
+            clamp: 0.0,
+        },
+    }
 }
 
 /// The compute rasterizer (`raster` = compute): the same per-pixel beam intersection
@@ -306,7 +339,12 @@ struct LightBeams {
 /// How the hulls reach the image (`raster`).
 enum HullRaster {
     /// The paper's: the hulls drawn, their fragments blended.
-    Hardware(RasterPass),
+    Hardware {
+        pass: RasterPass,
+        /// Back faces tested against the camera G-buffer's depth (no medium, and the
+        /// adapter forces early depth tests): see [`HullRaster::build`].
+        depth_culled: bool,
+    },
     /// The compute rasterizer and its resolve, the fixed-point accumulator they share
     /// and the pair counters.
     Compute {
@@ -340,8 +378,23 @@ impl HullRaster {
         )];
         match config.beams.raster {
             Raster::Hardware => {
-                let shader = Shader::new(ctx, "beams rasterize.wgsl", rasterize_source())?;
-                let pass =
+                // Without a medium a beam lights only the visible point, and only where
+                // that point lies inside its hull: then the camera ray leaves the hull
+                // through a back face at or behind the point. A back-face fragment in
+                // front of the visible surface (the sides of a tall beam seen against
+                // the floor beyond it) lights nothing, so the camera G-buffer's depth,
+                // attached read-only, rejects it before the shader runs; the image is
+                // the same (the shader returns zero there). Forced early (the fill
+                // counting frame writes storage, which would otherwise test late), so
+                // every frame shades and counts the same fragments; an adapter without
+                // the feature draws every back face, as the paper's pass does.
+                let depth_culled = renderer.scene().scene.medium.is_none()
+                    && ctx
+                        .features
+                        .contains(wgpu::Features::SHADER_EARLY_DEPTH_TEST);
+                let shader =
+                    Shader::new(ctx, "beams rasterize.wgsl", rasterize_source(depth_culled))?;
+                let mut builder =
                     RasterPass::builder(ctx, &format!("{name}/rasterize"), &shader, "vs_beam")
                         .frame(renderer)
                         .caller_group(1)
@@ -358,9 +411,12 @@ impl HullRaster {
                             ..Default::default()
                         })
                         .counted()
-                        .constants(&medium)
-                        .build()?;
-                Ok((Self::Hardware(pass), 0))
+                        .constants(&medium);
+                if depth_culled {
+                    builder = builder.depth_stencil(hull_depth_cull_state());
+                }
+                let pass = builder.build()?;
+                Ok((Self::Hardware { pass, depth_culled }, 0))
             }
             Raster::Compute => {
                 let camera = &renderer.scene().scene.camera;
@@ -446,7 +502,7 @@ impl HullRaster {
         light: &LightBuffers,
     ) -> Result<wgpu::BindGroup, GpuError> {
         match self {
-            Self::Hardware(pass) => pass
+            Self::Hardware { pass, .. } => pass
                 .caller_schema(1)?
                 .bind(device, &[("u", &light.uniforms), ("beams", &light.beams)]),
             Self::Compute {
@@ -1033,8 +1089,18 @@ impl CausticsMethod for BeamMethod {
             load_attachment(&targets.volume.view),
         ];
         match &self.rasterize {
-            HullRaster::Hardware(rasterize) => {
-                let mut pass = rasterize.begin(frame, &attachments, None)?;
+            HullRaster::Hardware {
+                pass: rasterize,
+                depth_culled,
+            } => {
+                // Read-only (no depth ops): the G-buffer's depth stays as the base
+                // passes wrote it.
+                let depth = depth_culled.then(|| wgpu::RenderPassDepthStencilAttachment {
+                    view: &renderer.camera_gbuffer().depth.layer_views[0],
+                    depth_ops: None,
+                    stencil_ops: None,
+                });
+                let mut pass = rasterize.begin(frame, &attachments, depth)?;
                 for light in &self.lights {
                     pass.set_bind_group(1, &light.raster_group, &[]);
                     pass.draw_indirect(&light.buffers.indirect_args, DRAW_ARGS_OFFSET);
@@ -1140,7 +1206,12 @@ mod tests {
     #[test]
     fn shaders_validate() -> Result<(), String> {
         shader::validate_wgsl("beams generate.wgsl", &generate_source())?;
-        shader::validate_wgsl("beams rasterize.wgsl", &rasterize_source())?;
+        shader::validate_wgsl("beams rasterize.wgsl", &rasterize_source(false))?;
+        let culled = rasterize_source(true);
+        if !culled.contains("@early_depth_test(force)") {
+            return Err("the depth-culled rasterize.wgsl lacks its forced early depth test".into());
+        }
+        shader::validate_wgsl("beams rasterize.wgsl (depth-culled)", &culled)?;
         shader::validate_wgsl("beams rasterize_compute.wgsl", &rasterize_compute_source())?;
         shader::validate_wgsl("beams resolve.wgsl", &resolve_source())?;
         shader::validate_wgsl("beams orphans.wgsl", &orphans_source())?;

@@ -1,6 +1,9 @@
 // Beam rasterization (Sect. 5): each beam's hull is drawn from the camera with its
 // front faces culled, so every covered pixel runs the fragment shader once per beam,
-// which shades it with the beam (beam_shading.wgsl).
+// which shades it with the beam (beam_shading.wgsl). Without a medium the pass is
+// depth-culled (lib.rs `HullRaster::build`): a back face in front of the visible
+// surface lights nothing and is rejected before the shader, whose attribute line below
+// then also forces the test early.
 
 struct VsOut {
     @builtin(position) clip: vec4<f32>,
@@ -22,7 +25,7 @@ fn vs_beam(@builtin(vertex_index) vi: u32) -> VsOut {
     return o;
 }
 
-@fragment
+@fragment // fs_beam
 fn fs_beam(in: VsOut) -> BeamOut {
     count_fragment(in.clip);
     let eye = frame.eye.xyz;

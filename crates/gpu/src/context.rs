@@ -16,11 +16,13 @@ pub const REQUIRED_FEATURES: wgpu::Features = wgpu::Features::FLOAT32_BLENDABLE;
 /// absent (never as 0): timestamps give per-pass GPU time, pipeline statistics give
 /// fragment-shader invocations and primitive counts per pass. Timestamps inside passes
 /// let a compute pass's beginning be taken before its first dispatch on lavapipe
-/// ([`crate::profiling`]).
+/// ([`crate::profiling`]). Forced early depth tests let the beam methods reject hull
+/// fragments behind nothing they light before shading them, in every frame alike.
 pub const OPTIONAL_FEATURES: wgpu::Features = wgpu::Features::TIMESTAMP_QUERY
     .union(wgpu::Features::TIMESTAMP_QUERY_INSIDE_PASSES)
     .union(wgpu::Features::PIPELINE_STATISTICS_QUERY)
-    .union(wgpu::Features::INDIRECT_FIRST_INSTANCE);
+    .union(wgpu::Features::INDIRECT_FIRST_INSTANCE)
+    .union(wgpu::Features::SHADER_EARLY_DEPTH_TEST);
 
 /// Where the adapter filter came from, for messages.
 #[derive(Debug, Clone)]
