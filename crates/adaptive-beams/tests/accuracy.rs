@@ -125,8 +125,9 @@ fn tight_hulls_shade_fewer_fragments_than_prisms_for_the_same_image() {
 /// Without a medium the hull pass is tested against the camera G-buffer's depth (a back
 /// face in front of the visible surface lights nothing): the image must stay the same
 /// bit for bit, with far fewer fragments shaded, on a scene of tall beams seen from the
-/// side (water_pool) and on the focus of sphere_on_plane. The uncalled path is the one
-/// of an adapter without forced early depth tests (the feature masked off here).
+/// side (water_pool) and on the focus of sphere_on_plane. Without the test is how an
+/// adapter without forced early depth tests draws the hulls (the feature masked off
+/// here).
 #[test]
 fn the_depth_test_culls_hull_fragments_without_changing_the_image() {
     for (scene, fewer) in [("water_pool", 0.1), ("sphere_on_plane", 0.6)] {
