@@ -84,7 +84,7 @@ const SPLIT_HISTOGRAM: Word = Word {
     )
 };
 
-/// Every word, by index (words 0 to 7 and 49 to 63 are unused).
+/// Every word, by index (words 0 to 7 and 51 to 63 are unused).
 #[rustfmt::skip]
 pub(crate) const CONTROL: &[Word] = &[
     LEVEL,
@@ -115,6 +115,8 @@ pub(crate) const CONTROL: &[Word] = &[
     counter("C_OVERFLOW_ORPHANS", 46, "overflow_orphans", "orphan records that found no room (splat_orphans)"),
     counter("C_ORPHAN_CORNERS", 47, "orphan_corners", "landed corners of the orphan records (splat_orphans)"),
     counter("C_SPLIT_FAMILY", 48, "splits_family", "splits asked because a further light-path family parts ways"),
+    counter("C_VERTEX_PATHS", 49, "vertex_paths", "main light paths the vertex cache traced, one per lattice vertex needed (0 without it)"),
+    counter("C_VERTEX_CACHE_MISSES", 50, "vertex_cache_misses", "main paths read from the vertex cache that it had not traced (a defect: 0)"),
     SPLIT_HISTOGRAM,
 ];
 
@@ -154,6 +156,8 @@ pub const COUNTER_DOCS: &[CounterDoc] = &[
     CounterDoc { name: "splits_deferred", doc: "splits the oracle asked for that the beam budget left undone: the triangle stayed a leaf because splits of higher priority used the budget (0 without beam_budget; counted also in splits_*)" },
     CounterDoc { name: "splits_family", doc: "with split_families: triangles split because a light-path family beyond the main path (the Fresnel reflection, the internal reflections of bounces) parts ways at their corners while the main path does not and no other criterion asked (0 in static-grid)" },
     CounterDoc { name: "splits_energy", doc: "triangles split by the energy criterion: the beam's flux relative to an unrefined beam's times how much it focuses where it is seen exceeds split_energy_threshold (0 in static-grid)" },
+    CounterDoc { name: "vertex_cache_misses", doc: "main light paths decide or emit read from the vertex cache that no level had traced, read as paths that are not valid (light lost); 0 in a good run" },
+    CounterDoc { name: "vertex_paths", doc: "main light paths the vertex cache traced, summed over the lights: one per vertex that some level's corners or split-oracle midpoints needed, traced once (without the cache a vertex is traced again for each triangle that has it as a corner, as an oracle midpoint and when its leaf is emitted); 0 where the cache's lattice of (grid x 2^levels + 1)^2 vertices does not fit its 64 MiB" },
 ];
 
 impl Word {

@@ -17,6 +17,10 @@ pub(crate) const BEAM_BYTES: u64 = std::mem::size_of::<BeamRecord>() as u64;
 /// shares, and their receivers.
 pub(crate) const ORPHAN_BYTES: u64 = 160;
 
+/// Bytes of one `CachedPath` (generate.wgsl): a vertex's main light path in the vertex
+/// cache.
+pub(crate) const VERTEX_PATH_BYTES: u64 = 128;
+
 /// Mirrors `SpecularSlot` in types.wgsl: one caustic generator.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
@@ -64,7 +68,7 @@ pub(crate) struct BeamUniforms {
     beam_budget: u32,
     splat_orphans: u32,
     light_index: u32,
-    _pad: u32,
+    vertex_cache_side: u32,
 }
 
 /// Mirrors `FilterUniforms` in filter.wgsl.
@@ -180,7 +184,8 @@ pub(crate) fn slots(scene: &Scene, gpu_scene: &GpuScene) -> Vec<Slot> {
 impl BeamUniforms {
     /// The uniforms of `config` for the scene's light `light_index` and its `view`, the
     /// generators `slots` and their impostors in `atlas` (the slots in order, then
-    /// the receivers).
+    /// the receivers), with the vertex cache's lattice of `vertex_cache_side` vertices a
+    /// side (0: none).
     pub(crate) fn new(
         scene: &Scene,
         config: &BeamConfig,
@@ -188,6 +193,7 @@ impl BeamUniforms {
         view: &LightView,
         slots: &[Slot],
         atlas: &ImpostorAtlas,
+        vertex_cache_side: u32,
     ) -> Self {
         let center_reach = |k: usize| {
             let e = &atlas.entries[k];
@@ -282,7 +288,7 @@ impl BeamUniforms {
             beam_budget: if r.levels > 0 { r.beam_budget } else { 0 },
             splat_orphans: u32::from(b.splat_orphans),
             light_index: light_index as u32,
-            _pad: 0,
+            vertex_cache_side,
         }
     }
 }
@@ -340,6 +346,7 @@ mod tests {
                 beam_budget,
                 splat_orphans,
                 light_index,
+                vertex_cache_side,
             }
         );
         assert_wgsl_layout!(
@@ -363,12 +370,15 @@ mod tests {
     }
 
     #[test]
-    fn candidate_and_orphan_sizes_match_their_wgsl() {
+    fn candidate_orphan_and_vertex_path_sizes_match_their_wgsl() {
         let (_, span) = caustics_gpu::layout::wgsl_struct_layout(&generate_source(), "Candidate")
             .unwrap_or_else(|e| panic!("{e}"));
         assert_eq!(u64::from(span), CANDIDATE_BYTES);
         let (_, span) = caustics_gpu::layout::wgsl_struct_layout(&generate_source(), "Orphan")
             .unwrap_or_else(|e| panic!("{e}"));
         assert_eq!(u64::from(span), ORPHAN_BYTES);
+        let (_, span) = caustics_gpu::layout::wgsl_struct_layout(&generate_source(), "CachedPath")
+            .unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(u64::from(span), VERTEX_PATH_BYTES);
     }
 }

@@ -99,8 +99,9 @@
 //!   the lights.
 //!
 //! Passes (names `<method>/<pass>`): `light_gbuffer` (one per light), `impostors`,
-//! `generate` (compute: per light `init_grid`, then per level `decide`, `budget` (with a
-//! beam budget), `scan`, `emit`, `advance`, then `finalize`), `rasterize` (the hulls, one
+//! `generate` (compute: per light `init_grid`, then per level `trace_lattice` (the vertex
+//! cache, [`vertex_cache_side`]), `decide`, `budget` (with a beam budget), `scan`, `emit`,
+//! `advance`, then `finalize`), `rasterize` (the hulls, one
 //! indirect draw per light; with `raster` = compute one indirect dispatch per light,
 //! then `resolve`), `orphan_points` (with `splat_orphans`, one indirect draw per light)
 //! and `surface_filter`.
@@ -124,7 +125,10 @@ pub use config::{BeamConfig, BeamParams, HullKind, MAX_BOUNCES, MAX_LEVELS, Refi
 use control::CONTROL_WORDS;
 pub use control::COUNTER_DOCS;
 pub use gpu_types::BeamRecord;
-use gpu_types::{BEAM_BYTES, BeamUniforms, CANDIDATE_BYTES, FilterUniforms, ORPHAN_BYTES, Slot};
+use gpu_types::{
+    BEAM_BYTES, BeamUniforms, CANDIDATE_BYTES, FilterUniforms, ORPHAN_BYTES, Slot,
+    VERTEX_PATH_BYTES,
+};
 
 const TYPES_WGSL: &str = include_str!("types.wgsl");
 const PATH_WGSL: &str = include_str!("path.wgsl");
@@ -311,6 +315,8 @@ pub struct BeamMethod {
     impostor_pass: ImpostorPass,
     atlas: ImpostorAtlas,
     buffers: Buffers,
+    /// Vertices a side of the vertex cache's lattice (0: none).
+    vertex_cache_side: u32,
     /// One per scene light, in the scene's order.
     lights: Vec<LightBeams>,
     generate: ComputePass,
@@ -539,6 +545,55 @@ fn uniform_buffer(device: &wgpu::Device, label: &str, contents: &[u8]) -> wgpu::
     })
 }
 
+/// Most bytes the vertex cache may take: beyond them (a fine grid refined deep) the
+/// paths are traced where they are asked for, as without it.
+const VERTEX_CACHE_MAX_BYTES: u64 = 64 << 20;
+
+/// Vertices a side of the vertex cache's lattice (generate.wgsl `trace_lattice`):
+/// grid·2^levels cells a side, the finest the refinement reaches, where every corner and
+/// oracle midpoint lies; 0 where its entries (one per vertex and one for the
+/// generation count) would take more than [`VERTEX_CACHE_MAX_BYTES`] or
+/// `max_binding_bytes`.
+pub fn vertex_cache_side(grid: u32, levels: u32, max_binding_bytes: u64) -> u32 {
+    let side = (u64::from(grid) << levels) + 1;
+    let bytes = (1 + side * side) * VERTEX_PATH_BYTES;
+    if bytes <= VERTEX_CACHE_MAX_BYTES.min(max_binding_bytes) {
+        side as u32
+    } else {
+        0
+    }
+}
+
+/// The vertex cache's buffer bytes for a lattice of `side` vertices a side (one entry
+/// where there is none: the shader declares an array of them).
+fn vertex_cache_bytes(side: u32) -> u64 {
+    (1 + u64::from(side).pow(2)) * VERTEX_PATH_BYTES
+}
+
+/// The vertex cache for `config` on this device, its bytes held in the memory ledger:
+/// none (side 0) where it would not fit, for it only saves time.
+fn plan_vertex_cache(ctx: &GpuContext, config: &BeamConfig) -> (u32, Option<Reservation>) {
+    let limits = &ctx.limits;
+    let side = vertex_cache_side(
+        config.beams.grid,
+        config.refinement.levels,
+        limits
+            .max_storage_binding_bytes
+            .min(limits.max_buffer_bytes),
+    );
+    if side == 0 {
+        return (0, None);
+    }
+    match ctx.memory.reserve(
+        "beam vertex cache",
+        vertex_cache_bytes(side),
+        "none needed: the cache is left out",
+    ) {
+        Ok(reservation) => (side, Some(reservation)),
+        Err(_) => (0, None),
+    }
+}
+
 /// A storage buffer of `size` bytes (at least 16), with `extra` usages.
 fn storage_buffer(
     device: &wgpu::Device,
@@ -572,9 +627,11 @@ struct Buffers {
     candidates_b: wgpu::Buffer,
     actions: wgpu::Buffer,
     offsets: wgpu::Buffer,
-    /// `splat_orphans`' per-candidate family mask and record offset (a 16-byte
-    /// placeholder without it).
-    orphan_slots: wgpu::Buffer,
+    /// The vertex cache (one entry without it): the lights' generations run one after
+    /// another and each stamps its own entries.
+    vertex_paths: wgpu::Buffer,
+    /// Its bytes in the memory ledger (none without it).
+    _vertex_cache_memory: Option<Reservation>,
     control_init: wgpu::Buffer,
     filter_uniforms: wgpu::Buffer,
     /// The `max_beams` buffers' bytes (these and every light's) in the device's memory
@@ -642,6 +699,7 @@ impl Buffers {
         camera: &caustics_scene::Camera,
         config: &BeamConfig,
         memory: Reservation,
+        (vertex_cache_side, vertex_cache_memory): (u32, Option<Reservation>),
     ) -> Result<Self, GpuError> {
         let device = &ctx.device;
         let storage = |label: &str, size: u64| {
@@ -662,8 +720,11 @@ impl Buffers {
             candidates_a: storage("beam candidates a", cap * CANDIDATE_BYTES),
             candidates_b: storage("beam candidates b", cap * CANDIDATE_BYTES),
             actions: storage("beam actions", cap * 4),
-            offsets: storage("beam offsets", cap * 8),
-            orphan_slots: storage("beam orphan slots", orphan_capacity(config) * 8),
+            // Children and beam offsets, and splat_orphans' family mask and record
+            // offset.
+            offsets: storage("beam offsets", cap * 16),
+            vertex_paths: storage("beam vertex cache", vertex_cache_bytes(vertex_cache_side)),
+            _vertex_cache_memory: vertex_cache_memory,
             control_init: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("beam control reset"),
                 contents: bytemuck::cast_slice(&[0u32; CONTROL_WORDS]),
@@ -685,7 +746,7 @@ impl Buffers {
                 &self.candidates_b,
                 &self.actions,
                 &self.offsets,
-                &self.orphan_slots,
+                &self.vertex_paths,
                 &self.control_init,
                 &self.filter_uniforms,
             ]
@@ -759,7 +820,9 @@ impl BeamMethod {
         let scene = &renderer.scene().scene;
         let impostor_pass = ImpostorPass::new(ctx)?;
         let atlas = impostor_atlas(ctx, renderer, &impostor_pass, slots, config)?;
-        let b = Buffers::new(ctx, &scene.camera, config, memory)?;
+        let vertex_cache = plan_vertex_cache(ctx, config);
+        let vertex_cache_side = vertex_cache.0;
+        let b = Buffers::new(ctx, &scene.camera, config, memory, vertex_cache)?;
 
         // Built (once per scene) also for the impostor tracer: the pass binds it either way.
         let bvh = renderer.scene().triangle_bvh(ctx)?;
@@ -774,6 +837,7 @@ impl BeamMethod {
             .caller_group(2)
             .kernels(&[
                 "init_grid",
+                "trace_lattice",
                 "decide",
                 "budget",
                 "scan",
@@ -783,15 +847,20 @@ impl BeamMethod {
             ])
             // The kernels dispatched from the indirect arguments must not also bind
             // them as storage (group 2): a buffer is one or the other in a dispatch.
+            .kernel_groups("trace_lattice", &[0, 1, BVH_GROUP])
             .kernel_groups("decide", &[0, 1, BVH_GROUP])
             .kernel_groups("budget", &[0, 1])
             .kernel_groups("scan", &[0, 1])
             .kernel_groups("emit", &[0, 1, BVH_GROUP])
-            // split_families is compiled in only where asked (generate.wgsl `decide`).
-            .constants(&[(
-                "SPLIT_FAMILIES",
-                f64::from(u8::from(config.refinement.split_families)),
-            )])
+            // split_families is compiled in only where asked (generate.wgsl `decide`),
+            // and the vertex cache where it is used (`main_path`).
+            .constants(&[
+                (
+                    "SPLIT_FAMILIES",
+                    f64::from(u8::from(config.refinement.split_families)),
+                ),
+                ("VERTEX_CACHE", f64::from(u8::from(vertex_cache_side > 0))),
+            ])
             .build()?;
 
         let (rasterize, raster_bytes) = HullRaster::build(ctx, renderer, config, name)?;
@@ -833,7 +902,8 @@ impl BeamMethod {
         let mut bytes = atlas.bytes() + b.bytes() + raster_bytes;
         for (index, view) in views.iter().enumerate() {
             let light_gbuffer = renderer.gbuffer_pass().light_gbuffer(ctx, view)?;
-            let uniforms = BeamUniforms::new(scene, config, index, view, slots, &atlas);
+            let uniforms =
+                BeamUniforms::new(scene, config, index, view, slots, &atlas, vertex_cache_side);
             let lb = LightBuffers::new(device, config, &uniforms);
             let generate_group = generate.caller_schema(1)?.bind(
                 device,
@@ -850,8 +920,8 @@ impl BeamMethod {
                     ("offsets", &b.offsets),
                     ("control", &lb.control),
                     ("beams", &lb.beams),
-                    ("orphan_slots", &b.orphan_slots),
                     ("orphans", &lb.orphans),
+                    ("vertex_paths", &b.vertex_paths),
                 ],
             )?;
             let args = indirect_args_group(device, &generate, &lb.indirect_args)?;
@@ -878,6 +948,7 @@ impl BeamMethod {
             impostor_pass,
             atlas,
             buffers: b,
+            vertex_cache_side,
             lights,
             generate,
             rasterize,
@@ -959,15 +1030,14 @@ fn reserve_beam_buffers(
         cap * BEAM_BYTES,
         &raise,
     )?;
-    // Both candidate lists, the actions and the offsets (with splat_orphans the orphan
-    // slots) once; each light's beams (with splat_orphans its orphan records).
-    let (slot_bytes, orphan_bytes) = if config.beams.splat_orphans {
-        (8, ORPHAN_BYTES)
+    // Both candidate lists, the actions and the offsets once; each light's beams (with
+    // splat_orphans its orphan records).
+    let orphan_bytes = if config.beams.splat_orphans {
+        ORPHAN_BYTES
     } else {
-        (0, 0)
+        0
     };
-    let per_beam =
-        2 * CANDIDATE_BYTES + 4 + 8 + slot_bytes + lights as u64 * (BEAM_BYTES + orphan_bytes);
+    let per_beam = 2 * CANDIDATE_BYTES + 4 + 16 + lights as u64 * (BEAM_BYTES + orphan_bytes);
     ctx.memory.reserve(
         &format!("max_beams: the beam generation buffers ({cap} beams, {lights} lights)"),
         cap * per_beam,
@@ -1044,16 +1114,25 @@ impl BeamMethod {
         let mut pass = self.generate.begin(frame)?;
         let base = 2 * self.config.beams.grid * self.config.beams.grid;
         let ranked = self.config.refinement.beam_budget > 0;
+        let levels = self.config.refinement.levels;
         // One light after another: they share the candidate lists.
         for light in &self.lights {
             let args = &light.buffers.indirect_args;
             pass.set_bind_group(1, &light.generate_group, &[]);
             pass.set_bind_group(2, &light.args, &[]);
             pass.dispatch("init_grid", [base.div_ceil(64), 1, 1])?;
-            for level in 0..=self.config.refinement.levels {
+            for level in 0..=levels {
+                // The vertices this level needs and the earlier ones did not trace: the
+                // base grid's and its midpoints, then the midpoints of each level's
+                // candidates (its corners were the level before's). The last level of
+                // a refined grid needs none.
+                if self.vertex_cache_side > 0 && (level < levels || levels == 0) {
+                    let side = (self.config.beams.grid << (level + 1).min(levels)) + 1;
+                    pass.dispatch("trace_lattice", [(side * side).div_ceil(64), 1, 1])?;
+                }
                 pass.dispatch_indirect("decide", args, 0)?;
                 // The last level splits nothing: no threshold to find.
-                if ranked && level < self.config.refinement.levels {
+                if ranked && level < levels {
                     pass.dispatch("budget", [1, 1, 1])?;
                 }
                 pass.dispatch("scan", [1, 1, 1])?;

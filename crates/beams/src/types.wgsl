@@ -76,6 +76,9 @@ struct BeamUniforms {
     splat_orphans: u32,
     // The scene light (index into group 0's `lights`) these beams carry.
     light_index: u32,
+    // Vertices a side of the vertex cache's lattice, grid·2^levels + 1 (0: no cache;
+    // generate.wgsl `trace_lattice`).
+    vertex_cache_side: u32,
 }
 
 // A triangle of the projected grid in the light's uv space: uv01 corners 0 and 1,
