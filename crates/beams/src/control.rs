@@ -84,7 +84,7 @@ const SPLIT_HISTOGRAM: Word = Word {
     )
 };
 
-/// Every word, by index (words 0 to 7 and 51 to 63 are unused).
+/// Every word, by index (words 0 to 7 and 53 to 63 are unused).
 #[rustfmt::skip]
 pub(crate) const CONTROL: &[Word] = &[
     LEVEL,
@@ -117,6 +117,8 @@ pub(crate) const CONTROL: &[Word] = &[
     counter("C_SPLIT_FAMILY", 48, "splits_family", "splits asked because a further light-path family parts ways"),
     counter("C_VERTEX_PATHS", 49, "vertex_paths", "main light paths the vertex cache traced, one per lattice vertex needed (0 without it)"),
     counter("C_VERTEX_CACHE_MISSES", 50, "vertex_cache_misses", "main paths read from the vertex cache that it had not traced (a defect: 0)"),
+    state("C_LATTICE_LISTED", 51, "vertices gather_lattice listed for the vertex cache to trace (this level)"),
+    state("C_LATTICE_TRACE", 52, "vertices trace_lattice traces (this level)"),
     SPLIT_HISTOGRAM,
 ];
 

@@ -3,7 +3,8 @@
 // per light-path family with its beam space, area function and hull (Sect. 4.3).
 // The paper refines in a geometry shader with stream-out; here each level is four
 // compute dispatches (decide, scan, emit, advance; with a beam budget, `budget`
-// between decide and scan) with a deterministic prefix sum instead of stream-out
+// between decide and scan; with the vertex cache, gather_lattice, lattice_args and
+// trace_lattice before decide) with a deterministic prefix sum instead of stream-out
 // order, so the same beams land in the same slots every frame.
 
 @group(1) @binding(6) var<storage, read_write> candidates_a: array<Candidate>;
@@ -21,11 +22,13 @@
 // a placeholder no kernel touches).
 @group(1) @binding(13) var<storage, read_write> orphans: array<Orphan>;
 // Indirect arguments: words 0..3 the dispatch over candidates, 4..7 the hull draw,
-// 8..11 the orphan point draw, 12..15 the compute rasterizer's dispatch.
+// 8..11 the orphan point draw, 12..15 the compute rasterizer's dispatch, 16..19 the
+// dispatch over the vertices the vertex cache traces (`trace_lattice`).
 // A group of its own, bound to the real buffer only for the kernels that write it
-// (init_grid, advance, finalize): a buffer cannot be storage and indirect in the same
-// dispatch, so the indirect ones (decide, emit) and scan see a placeholder here.
-@group(2) @binding(0) var<storage, read_write> indirect_args: array<u32, 16>;
+// (init_grid, lattice_args, advance, finalize): a buffer cannot be storage and indirect
+// in the same dispatch, so the indirect ones (trace_lattice, decide, emit) and the
+// others see a placeholder here.
+@group(2) @binding(0) var<storage, read_write> indirect_args: array<u32, 20>;
 // The vertex cache (u.vertex_cache_side > 0; without it one entry no kernel touches):
 // entry 0 counts the generations, entry 1 + y·side + x holds the main path of lattice
 // vertex (x, y). See `trace_lattice`.
@@ -297,11 +300,16 @@ fn main_path(uv: vec2<f32>) -> PathEnd {
     return trace_path(uv, FAMILY_MAIN);
 }
 
-// Before a level's `decide` (direct dispatch over the lattice of the level's midpoints,
-// (grid·2^min(level+1, levels) + 1)² vertices): traces every vertex marked this
-// generation and not yet traced, at its exact lattice uv.
+// Before a level's `decide`, three dispatches: `gather_lattice` (direct, over the
+// lattice of the level's midpoints, (grid·2^min(level+1, levels) + 1)² vertices) lists
+// every vertex marked this generation and not yet traced, `lattice_args` sizes the
+// dispatch, `trace_lattice` (indirect, one invocation per listed vertex) traces each at
+// its exact lattice uv. The gather visits each vertex once, so each is listed (and
+// traced) once; only the tracing kernel holds the tracer, and it runs for the vertices
+// that need it, not the whole lattice. The list lives in `offsets` (four entries to a
+// candidate's vec4), free until `decide` writes it.
 @compute @workgroup_size(64)
-fn trace_lattice(@builtin(global_invocation_id) id: vec3<u32>) {
+fn gather_lattice(@builtin(global_invocation_id) id: vec3<u32>) {
     let shift = min(atomicLoad(&control[C_LEVEL]) + 1u, u.levels);
     let side = (u.grid << shift) + 1u;
     if id.x >= side * side {
@@ -313,8 +321,32 @@ fn trace_lattice(@builtin(global_invocation_id) id: vec3<u32>) {
     if vertex_paths[i].needed != generation || vertex_paths[i].traced == generation {
         return;
     }
+    let k = atomicAdd(&control[C_LATTICE_LISTED], 1u);
+    // Past the list's room a vertex stays untraced, and reads count as misses.
+    if k < 4u * u.max_beams {
+        offsets[k >> 2u][k & 3u] = i;
+    }
+}
+
+@compute @workgroup_size(1)
+fn lattice_args() {
+    let n = min(atomicLoad(&control[C_LATTICE_LISTED]), 4u * u.max_beams);
+    atomicStore(&control[C_LATTICE_TRACE], n);
+    atomicStore(&control[C_LATTICE_LISTED], 0u);
+    indirect_args[16] = (n + 63u) / 64u;
+    indirect_args[17] = 1u;
+    indirect_args[18] = 1u;
+}
+
+@compute @workgroup_size(64)
+fn trace_lattice(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x >= atomicLoad(&control[C_LATTICE_TRACE]) {
+        return;
+    }
+    let i = offsets[id.x >> 2u][id.x & 3u];
+    let q = vec2<u32>((i - 1u) % u.vertex_cache_side, (i - 1u) / u.vertex_cache_side);
     let uv = vec2<f32>(q) / f32(u.vertex_cache_side - 1u);
-    vertex_paths[i] = pack_path(trace_path(uv, FAMILY_MAIN), generation);
+    vertex_paths[i] = pack_path(trace_path(uv, FAMILY_MAIN), cache_generation());
     atomicAdd(&control[C_VERTEX_PATHS], 1u);
 }
 

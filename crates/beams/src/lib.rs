@@ -27,6 +27,11 @@
 //! - refinement is four compute kernels per level with a deterministic prefix sum
 //!   instead of a geometry shader with stream-out, so the same beams land in the same
 //!   slots every frame (and the additive image is bit-identical frame to frame);
+//! - each grid vertex's main path is traced once per frame (`vertex_cache`, on by
+//!   default; generate.wgsl `trace_lattice`), where the paper's geometry shader traces
+//!   it for every triangle that has it as a corner, again as an oracle midpoint and
+//!   when the leaf's beam is written: the same beams bit for bit, in half the time of
+//!   `generate` on lavapipe;
 //! - the split oracle's discontinuity criterion also traces the three edge midpoints
 //!   and splits where their light lands more than `split_hit_px` camera pixels and
 //!   more than `split_hit_rel` of the edge's landing length off the linear prediction
@@ -99,9 +104,9 @@
 //!   the lights.
 //!
 //! Passes (names `<method>/<pass>`): `light_gbuffer` (one per light), `impostors`,
-//! `generate` (compute: per light `init_grid`, then per level `trace_lattice` (the vertex
-//! cache, [`vertex_cache_side`]), `decide`, `budget` (with a beam budget), `scan`, `emit`,
-//! `advance`, then `finalize`), `rasterize` (the hulls, one
+//! `generate` (compute: per light `init_grid`, then per level `gather_lattice`,
+//! `lattice_args` and `trace_lattice` (the vertex cache, [`vertex_cache_side`]), `decide`,
+//! `budget` (with a beam budget), `scan`, `emit`, `advance`, then `finalize`), `rasterize` (the hulls, one
 //! indirect draw per light; with `raster` = compute one indirect dispatch per light,
 //! then `resolve`), `orphan_points` (with `splat_orphans`, one indirect draw per light)
 //! and `surface_filter`.
@@ -293,8 +298,10 @@ const DRAW_ARGS_OFFSET: u64 = 16;
 const ORPHAN_DRAW_ARGS_OFFSET: u64 = 32;
 /// Byte offset of the compute rasterizer's dispatch arguments there.
 const RASTER_DISPATCH_ARGS_OFFSET: u64 = 48;
+/// Byte offset of `trace_lattice`'s dispatch (the vertex cache) in the indirect buffer.
+const LATTICE_DISPATCH_ARGS_OFFSET: u64 = 64;
 /// Bytes of the indirect-arguments buffer (`indirect_args` in generate.wgsl).
-const INDIRECT_ARGS_BYTES: u64 = 64;
+const INDIRECT_ARGS_BYTES: u64 = 80;
 /// u32 words per camera pixel of the compute rasterizer's accumulator (`ACCUM_WORDS` in
 /// rasterize_compute.wgsl and resolve.wgsl): surface and volume RGB, a fixed-point
 /// channel each.
@@ -573,6 +580,9 @@ fn vertex_cache_bytes(side: u32) -> u64 {
 /// The vertex cache for `config` on this device, its bytes held in the memory ledger:
 /// none (side 0) where it would not fit, for it only saves time.
 fn plan_vertex_cache(ctx: &GpuContext, config: &BeamConfig) -> (u32, Option<Reservation>) {
+    if !config.beams.vertex_cache {
+        return (0, None);
+    }
     let limits = &ctx.limits;
     let side = vertex_cache_side(
         config.beams.grid,
@@ -837,6 +847,8 @@ impl BeamMethod {
             .caller_group(2)
             .kernels(&[
                 "init_grid",
+                "gather_lattice",
+                "lattice_args",
                 "trace_lattice",
                 "decide",
                 "budget",
@@ -847,6 +859,7 @@ impl BeamMethod {
             ])
             // The kernels dispatched from the indirect arguments must not also bind
             // them as storage (group 2): a buffer is one or the other in a dispatch.
+            .kernel_groups("gather_lattice", &[0, 1])
             .kernel_groups("trace_lattice", &[0, 1, BVH_GROUP])
             .kernel_groups("decide", &[0, 1, BVH_GROUP])
             .kernel_groups("budget", &[0, 1])
@@ -1128,7 +1141,9 @@ impl BeamMethod {
                 // a refined grid needs none.
                 if self.vertex_cache_side > 0 && (level < levels || levels == 0) {
                     let side = (self.config.beams.grid << (level + 1).min(levels)) + 1;
-                    pass.dispatch("trace_lattice", [(side * side).div_ceil(64), 1, 1])?;
+                    pass.dispatch("gather_lattice", [(side * side).div_ceil(64), 1, 1])?;
+                    pass.dispatch("lattice_args", [1, 1, 1])?;
+                    pass.dispatch_indirect("trace_lattice", args, LATTICE_DISPATCH_ARGS_OFFSET)?;
                 }
                 pass.dispatch_indirect("decide", args, 0)?;
                 // The last level splits nothing: no threshold to find.
@@ -1313,6 +1328,8 @@ mod tests {
             INDIRECT_ARGS_BYTES / 4
         )));
         assert_eq!(RASTER_DISPATCH_ARGS_OFFSET / 4, 12);
+        assert_eq!(LATTICE_DISPATCH_ARGS_OFFSET / 4, 16);
+        assert!(GENERATE_WGSL.contains("indirect_args[16] = (n + 63u) / 64u;"));
         assert!(GENERATE_WGSL.contains("indirect_args[12] = min(beams, 32768u);"));
     }
 }
