@@ -105,9 +105,9 @@
 //!
 //! Passes (names `<method>/<pass>`): `light_gbuffer` (one per light), `impostors`,
 //! `generate` (compute: per light `init_grid`, then per level `gather_lattice`,
-//! `lattice_args` and `trace_lattice` (the vertex cache, [`vertex_cache_side`]), `decide`,
-//! `budget` (with a beam budget), `scan`, `emit`, `advance`, then `finalize`), `rasterize` (the hulls, one
-//! indirect draw per light; with `raster` = compute one indirect dispatch per light,
+//! `lattice_args` and `trace_lattice` (the vertex cache, [`vertex_cache_side`]),
+//! `decide`, `budget` (with a beam budget), `scan`, `emit`, `advance`, then
+//! `finalize`), `rasterize` (the hulls, one indirect draw per light; with `raster` = compute one indirect dispatch per light,
 //! then `resolve`), `orphan_points` (with `splat_orphans`, one indirect draw per light)
 //! and `surface_filter`.
 
@@ -562,10 +562,10 @@ const VERTEX_CACHE_MAX_BYTES: u64 = 64 << 20;
 /// generation count) would take more than [`VERTEX_CACHE_MAX_BYTES`] or
 /// `max_binding_bytes`.
 pub fn vertex_cache_side(grid: u32, levels: u32, max_binding_bytes: u64) -> u32 {
-    let side = (u64::from(grid) << levels) + 1;
-    let bytes = (1 + side * side) * VERTEX_PATH_BYTES;
-    if bytes <= VERTEX_CACHE_MAX_BYTES.min(max_binding_bytes) {
-        side as u32
+    // grid <= 256 and levels <= MAX_LEVELS: the side fits a u32 with room.
+    let side = u32::try_from((u64::from(grid) << levels) + 1).unwrap_or(u32::MAX);
+    if vertex_cache_bytes(side) <= VERTEX_CACHE_MAX_BYTES.min(max_binding_bytes) {
+        side
     } else {
         0
     }
@@ -1311,6 +1311,21 @@ mod tests {
         shader::validate_wgsl("beams resolve.wgsl", &resolve_source())?;
         shader::validate_wgsl("beams orphans.wgsl", &orphans_source())?;
         shader::validate_wgsl("beams filter.wgsl", &filter_source())
+    }
+
+    #[test]
+    fn the_vertex_cache_holds_the_finest_lattice_or_is_left_out() {
+        let unlimited = u64::MAX;
+        // adaptive-beams' defaults: 16² refined 3 times, 129² entries (2.1 MB).
+        assert_eq!(vertex_cache_side(16, 3, unlimited), 129);
+        assert_eq!(vertex_cache_bytes(129), (1 + 129 * 129) * VERTEX_PATH_BYTES);
+        // static-grid's: 64², not refined.
+        assert_eq!(vertex_cache_side(64, 0, unlimited), 65);
+        // 64² refined 3 times: 513² entries of 128 bytes (33.7 MB) fit 64 MiB...
+        assert_eq!(vertex_cache_side(64, 3, unlimited), 513);
+        // ... but not a 32 MiB binding, nor 256² refined 4 times (4,097², 2.1 GB).
+        assert_eq!(vertex_cache_side(64, 3, 32 << 20), 0);
+        assert_eq!(vertex_cache_side(256, MAX_LEVELS, unlimited), 0);
     }
 
     #[test]
