@@ -21,8 +21,8 @@
 //! 4. `triangles` (raster, §4.2): all triangles into the six faces of the caustic
 //!    cube map, additive, irradiance and luminance × distance;
 //! 5. `orphan_splats` (raster, only with `splat_orphans`): the hits none of whose
-//!    triangles was kept, each as a one-texel splat (`orphans.wgsl`), so their light is
-//!    not lost; the `photon_hits_without_triangles` counter says how many there are
+//!    triangles was kept, each as a one-texel splat (`orphans.wgsl`; `orphan_kernel_px`
+//!    widens it to splatting's box kernel), so their light is not lost; the `photon_hits_without_triangles` counter says how many there are
 //!    either way;
 //! 6. `camera_lookup` (§4.3): ρ/π · E at each camera pixel whose distance from the
 //!    centre matches the map's (`distance_test`).
@@ -139,12 +139,41 @@ method_params! {
         vertex_area: VertexArea = VertexArea::Fan;
         /// splat the hits none of whose triangles is kept as one cube-map texel each, so their light is not lost (paper: false)
         splat_orphans: bool = false;
+        /// with splat_orphans: side (cube-map texels) of the box kernel each orphan hit is splatted as, splatting's energy-conserving kernel (1: one texel; 0: splatting's default kernel, 4 x cube_size / resolution; a wider kernel spreads the lone texels of light a torn wavefront leaves)
+        orphan_kernel_px: u32 = 1 => closed(0.0, 64.0);
         /// how the triangles reach the cube map: hardware (drawn, additive blending: the paper's) or compute (compute kernels find each triangle's covered texels with edge functions and add them into a fixed-point accumulator with integer atomics, then resolved: the same image on every run)
         raster: Raster = Raster::Hardware;
         // At most 8192: an invocation walks up to six such footprints (a triangle on
         // every face), under llvmpipe's 65,535 loop iterations per invocation.
         /// with raster = compute: a triangle's footprint on a face (its bounding rectangle) of up to this many texels is walked by the triangle's own invocation, a larger one by a workgroup of 64
         raster_small_footprint: u32 = 256 => closed(0.0, 8192.0);
+    }
+    check = orphan_kernel_fits;
+}
+
+/// The rules between parameters: a wider orphan kernel only where orphans are splatted,
+/// and no wider than a cube face.
+fn orphan_kernel_fits(p: &CausticTrianglesParams) -> Result<(), String> {
+    if p.orphan_kernel_px != 1 && !p.splat_orphans {
+        return Err(format!(
+            "orphan_kernel_px: {} texels for the orphans' splats, which only splat_orphans = true draws",
+            p.orphan_kernel_px
+        ));
+    }
+    if orphan_kernel_px(p) > p.hits.cube_size {
+        return Err(format!(
+            "orphan_kernel_px: expected at most cube_size ({}), got {}",
+            p.hits.cube_size, p.orphan_kernel_px
+        ));
+    }
+    Ok(())
+}
+
+/// The orphans' kernel side `params` ask for, `orphan_kernel_px = 0` resolved.
+pub fn orphan_kernel_px(params: &CausticTrianglesParams) -> u32 {
+    match params.orphan_kernel_px {
+        0 => photon_hits::auto_kernel_px(&params.hits),
+        k => k,
     }
 }
 
@@ -229,7 +258,7 @@ pub const TRIANGLE_COUNTER_DOCS: &[CounterDoc] = &[
     CounterDoc { name: "raster_texels_covered", doc: "with raster = compute: (triangle, cube-map texel) pairs whose texel centre a kept triangle covers, each adding its light (the hardware path's triangles fragments)" },
     CounterDoc { name: "raster_large_footprints", doc: "with raster = compute: (triangle, face) footprints larger than raster_small_footprint, walked by a workgroup of 64 invocations instead of the triangle's own" },
     CounterDoc { name: "raster_footprints_walked_by_lane", doc: "with raster = compute: large footprints the list had no room for, walked by the triangle's own invocation (same light, slower)" },
-    CounterDoc { name: "photon_hits_without_triangles", doc: "valid photon hits none of whose triangles is kept (orphans), counted by the vertex_irradiance pass: their light is lost unless splat_orphans draws each as a one-texel splat" },
+    CounterDoc { name: "photon_hits_without_triangles", doc: "valid photon hits none of whose triangles is kept (orphans), counted by the vertex_irradiance pass: their light is lost unless splat_orphans draws each as a one-texel splat (orphan_kernel_px texels a side)" },
 ];
 
 /// `caustic-triangles` bound to one scene.
@@ -548,6 +577,7 @@ fn hardware_draw(
                     ],
                 )
                 .fragment("fs_splat", &[Some(additive_hdr_target())])
+                .constants(&[("ORPHAN_KERNEL_PX", f64::from(orphan_kernel_px(params)))])
                 .build()?,
         )
     } else {
@@ -621,7 +651,10 @@ fn compute_draw(
         .frame(renderer)
         .bind(1, &entries)
         .kernels(&kernels)
-        .constants(&[("small_texels", f64::from(params.raster_small_footprint))])
+        .constants(&[
+            ("small_texels", f64::from(params.raster_small_footprint)),
+            ("ORPHAN_KERNEL_PX", f64::from(orphan_kernel_px(params))),
+        ])
         .build()?;
     Ok(ComputeDraw {
         pass,
@@ -837,6 +870,15 @@ mod tests {
                 "raster_small_footprint",
             ),
             (serde_json::json!({"kernel_px": 4}), "known parameters"),
+            (serde_json::json!({"orphan_kernel_px": 4}), "splat_orphans"),
+            (
+                serde_json::json!({"orphan_kernel_px": 65}),
+                "orphan_kernel_px",
+            ),
+            (
+                serde_json::json!({"orphan_kernel_px": 32, "splat_orphans": true, "cube_size": 16}),
+                "cube_size",
+            ),
         ] {
             let msg = parse::<CausticTrianglesParams>(NAME, &json)
                 .expect_err("must fail")
@@ -846,5 +888,14 @@ mod tests {
         let p = parse::<CausticTrianglesParams>(NAME, &serde_json::Value::Null).expect("defaults");
         assert_eq!(p, CausticTrianglesParams::default());
         assert_eq!((p.hits.resolution, p.max_stretch), (128, 1000.0));
+        // The orphans' default kernel is one texel; 0 is splatting's, four hit-image
+        // texels wide.
+        assert_eq!(orphan_kernel_px(&p), 1);
+        let auto = parse::<CausticTrianglesParams>(
+            NAME,
+            &serde_json::json!({"orphan_kernel_px": 0, "splat_orphans": true}),
+        )
+        .expect("the splatting kernel");
+        assert_eq!(orphan_kernel_px(&auto), 4 * 512 / 128);
     }
 }

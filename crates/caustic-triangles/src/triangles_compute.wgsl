@@ -141,9 +141,12 @@ fn rasterize_large(
     group_count_end(lane, covered, RASTER_TEXELS);
 }
 
+// Side of an orphan's kernel (cube-map texels, `orphan_kernel_px`).
+override ORPHAN_KERNEL_PX: f32;
+
 // With `splat_orphans`: one invocation per photon-image texel; an orphan hit (marked
-// by vertex_irradiance_pass with w = 1) adds its one-texel splat, the raster path's
-// orphans.wgsl value (`splat_texel` with the hit's whole flux).
+// by vertex_irradiance_pass with w = 1) adds its kernel's texels, the raster path's
+// orphans.wgsl values (`splat_texel` with the hit's flux over the kernel's texels).
 @compute @workgroup_size(64)
 fn orphan_splats(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let v = gid.y * groups.x * 64u + gid.x;
@@ -157,7 +160,14 @@ fn orphan_splats(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wor
     let l = h.position.xyz - cm.center.xyz;
     let fuv = impostor_face_uv(l);
     let face = u32(fuv.z);
-    let origin = splat_origin(fuv.xy, 1.0);
-    let value = splat_texel(face, origin + 0.5, h.flux.rgb, h.normal.xyz, length(l), l);
-    add_atlas(face, vec2<u32>(origin), value);
+    let k = u32(ORPHAN_KERNEL_PX);
+    let origin = splat_origin(fuv.xy, ORPHAN_KERNEL_PX);
+    let share = h.flux.rgb / (ORPHAN_KERNEL_PX * ORPHAN_KERNEL_PX);
+    for (var r = 0u; r < k; r++) {
+        for (var c = 0u; c < k; c++) {
+            let texel = vec2<u32>(origin) + vec2<u32>(c, r);
+            let value = splat_texel(face, vec2<f32>(texel) + 0.5, share, h.normal.xyz, length(l), l);
+            add_atlas(face, texel, value);
+        }
+    }
 }

@@ -397,6 +397,8 @@ fn the_compute_path_matches_the_hardware_path_and_repeats_itself() {
             ..Default::default()
         },
         splat_orphans: true,
+        // A kernel of 3 × 3 texels per orphan: both paths spread it alike.
+        orphan_kernel_px: 3,
         raster,
         raster_small_footprint,
         ..Default::default()

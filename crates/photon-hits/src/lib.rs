@@ -240,6 +240,32 @@ pub fn caustic_generators(scene: &Scene) -> Result<Vec<(usize, GeneratorKind)>, 
     Ok(generators)
 }
 
+/// Kernel side (cube-map texels) per hit-image texel spacing of [`auto_kernel_px`].
+///
+/// Chosen from the `splatting-kernel` experiment (bench/experiments, results in
+/// results/reproduce/splatting-kernel): kernels of 1-32 texels at hit images of 64²,
+/// 128² and 256² (cube faces of 512²) on every built-in scene splatting renders, scored
+/// against the CPU reference at 128×96 with 16 samples per pixel. The kernel with the
+/// lowest mean HDR-FLIP over the scenes was 32 texels at 64² hits (0.322), 16 at 128²
+/// (0.290), 8 at 256² (0.266): in each case 4 × cube_size / resolution, a kernel four
+/// hit-image texels wide. The lowest geometric-mean relMSE was at 24, 12 and 8 texels,
+/// within 15 % of the default's (0.0107 against 0.0123 at 64², 0.0045 against 0.0048
+/// at 128²). Smaller kernels leave the photons' dots (the old fixed 4 texels at 128²
+/// hits: water_pool HDR-FLIP 0.358 against 0.133 at 16), larger ones blur the foci.
+/// Measured at 128×96 (re-run after each kernel texel took its own footprint and
+/// distance, which gave the ring back the 16 % its large kernels lost to the distance
+/// test; the choice stood): at larger camera resolutions a blur shows more, and a
+/// smaller kernel may win there.
+pub const KERNEL_PER_HIT_TEXEL: u32 = 4;
+
+/// The kernel splatting's `kernel_px = 0` and caustic-triangles' `orphan_kernel_px = 0`
+/// stand for: [`KERNEL_PER_HIT_TEXEL`] × cube_size / resolution, rounded, within 1..=64
+/// and the cube face.
+pub fn auto_kernel_px(hits: &PhotonHitConfig) -> u32 {
+    let k = (KERNEL_PER_HIT_TEXEL * hits.cube_size + hits.resolution / 2) / hits.resolution;
+    k.clamp(1, 64.min(hits.cube_size))
+}
+
 /// What both photon-hit methods render: every reflecting or refracting generator seen
 /// by every light of any kind, surface caustics only (Umenhoffer et al. §3, §4.1).
 pub const CAPABILITIES: Capabilities = Capabilities {

@@ -29,6 +29,8 @@ struct Counters {
 // Whether the landed corners of dropped triangles are listed (`splat_orphans`; the list
 // then has room for them, 3 words per triangle, else 1).
 override SPLAT_ORPHANS: bool;
+// Vertices the orphans pass draws per corner: 1 (a point) or 6 (its kernel's quad).
+override ORPHAN_VERTICES: u32;
 
 // Triangles per chunk: classify's workgroup size.
 const CHUNK: u32 = 64u;
@@ -146,9 +148,9 @@ fn scan_chunks(@builtin(local_invocation_index) lane: u32) {
         draw_args[1] = 1u;
         draw_args[2] = 0u;
         draw_args[3] = 0u;
-        draw_args[4] = select(0u, total.y, SPLAT_ORPHANS);
+        draw_args[4] = select(0u, ORPHAN_VERTICES * total.y, SPLAT_ORPHANS);
         draw_args[5] = 1u;
-        draw_args[6] = total.x;
+        draw_args[6] = ORPHAN_VERTICES * total.x;
         draw_args[7] = 0u;
     }
 }

@@ -38,7 +38,8 @@
 //! `reflections` the Fresnel reflection off each dielectric generator. A triangle whose
 //! vertices part (one leaves the sheet, or they reach different receivers or paths) has
 //! no area ratio and Wallace drops it; `splat_orphans` draws its landed vertices as
-//! one-pixel points of a third of its flux each (`orphans.wgsl`), which a bumpy
+//! one-pixel points of a third of its flux each (`orphans.wgsl`; `orphan_kernel_px`
+//! spreads each over a Gaussian of that many pixels instead), which a bumpy
 //! refractor's speckle of total internal reflections needs. Like the original it
 //! point-samples triangles thinner than a pixel (noisy cusps), and it renders no media.
 //!
@@ -150,12 +151,33 @@ method_params! {
         /// landed vertex, a third of the triangle's flux each (Wallace: false, that light
         /// is lost)
         splat_orphans: bool = false;
+        /// with splat_orphans: sigma (camera pixels) of a Gaussian each orphan point is spread over instead of one pixel (truncated at 2 sigma, normalised over the pixels it covers, so a flat receiver keeps its flux); 0 = one-pixel points (bound: a 33 x 33 pixel quad per point)
+        orphan_kernel_px: f64 = 0.0 => closed(0.0, 8.0);
         /// how the kept triangles reach the image: hardware (drawn, additive blending: Wallace's) or compute (compute kernels find each triangle's covered pixels with edge functions and add them into a fixed-point accumulator with integer atomics, then resolved: the same image on every run)
         raster: Raster = Raster::Hardware;
         // At most 8192: under llvmpipe's 65,535 loop iterations per invocation.
         /// with raster = compute: a triangle's footprint (its bounding rectangle) of up to this many pixels is walked by the triangle's own invocation, a larger one by a workgroup of 64
         raster_small_footprint: u32 = 256 => closed(0.0, 8192.0);
     }
+    check = orphan_kernel_needs_orphans;
+}
+
+/// The rule between parameters: a kernel for the orphans' points only where they are
+/// drawn.
+fn orphan_kernel_needs_orphans(p: &WavefrontParams) -> Result<(), String> {
+    if p.orphan_kernel_px > 0.0 && !p.splat_orphans {
+        return Err(format!(
+            "orphan_kernel_px: {} spreads the orphans' points, which only splat_orphans = true draws",
+            p.orphan_kernel_px
+        ));
+    }
+    Ok(())
+}
+
+/// Vertices the orphans pass draws per landed corner: a point, or the two triangles of
+/// its kernel's quad (`orphan_kernel_px`).
+fn orphan_vertices(params: &WavefrontParams) -> u32 {
+    if params.orphan_kernel_px > 0.0 { 6 } else { 1 }
 }
 
 impl Method for Wavefront {
@@ -293,7 +315,7 @@ const COUNTER_DOCS: &[CounterDoc] = &[
     CounterDoc { name: "dropped_invalid_vertex", doc: "triangles dropped because at least one of their vertices did not land (any vertices_* drop)" },
     CounterDoc { name: "dropped_receiver_mismatch", doc: "triangles dropped because their vertices landed on different receivers, or on different sides of one" },
     CounterDoc { name: "dropped_path_mismatch", doc: "triangles dropped because their vertices took different specular paths (the objects met and the side each was met from, in order)" },
-    CounterDoc { name: "orphan_corners", doc: "with splat_orphans: landed vertices of dropped triangles, once per dropped triangle they are a corner of, each drawn as a one-pixel point of a third of its triangle's flux (without splat_orphans that light is lost)" },
+    CounterDoc { name: "orphan_corners", doc: "with splat_orphans: landed vertices of dropped triangles, once per dropped triangle they are a corner of, each drawn as a one-pixel point (or orphan_kernel_px's Gaussian) of a third of its triangle's flux (without splat_orphans that light is lost)" },
     CounterDoc { name: "raster_pixels_covered", doc: "with raster = compute: (triangle, pixel) pairs whose pixel centre a kept triangle covers, each then tested as a fragment (the hardware path's splat fragments)" },
     CounterDoc { name: "raster_large_footprints", doc: "with raster = compute: kept triangles whose footprint exceeds raster_small_footprint pixels, walked by a workgroup of 64 invocations instead of the triangle's own" },
     CounterDoc { name: "raster_footprints_walked_by_lane", doc: "with raster = compute: large footprints the list had no room for, walked by the triangle's own invocation (same light, slower)" },
@@ -564,7 +586,10 @@ impl Wavefront {
             .frame(renderer)
             .caller_group(1)
             .kernels(&["classify_triangles", "scan_chunks", "scatter_chunks"])
-            .constants(&[("SPLAT_ORPHANS", f64::from(u8::from(params.splat_orphans)))])
+            .constants(&[
+                ("SPLAT_ORPHANS", f64::from(u8::from(params.splat_orphans))),
+                ("ORPHAN_VERTICES", f64::from(orphan_vertices(params))),
+            ])
             .build()?;
         let (splat, compute_bytes) = match params.raster {
             Raster::Hardware => {
@@ -586,15 +611,17 @@ impl Wavefront {
         };
         let orphans = if params.splat_orphans {
             let shader = Shader::new(ctx, "wavefront orphans.wgsl", draw_source(ORPHANS_WGSL))?;
-            Some(
+            let mut builder =
                 RasterPass::builder(ctx, "wavefront/orphan_points", &shader, "vs_orphan")
                     .frame(renderer)
                     .caller_group(1)
-                    .points()
                     .fragment("fs_orphan", &[Some(additive_hdr_target())])
                     .counted()
-                    .build()?,
-            )
+                    .constants(&[("ORPHAN_SIGMA_PX", params.orphan_kernel_px)]);
+            if orphan_vertices(params) == 1 {
+                builder = builder.points();
+            }
+            Some(builder.build()?)
         } else {
             None
         };
@@ -990,7 +1017,7 @@ impl CausticsMethod for Wavefront {
             for sheet in &self.sheets {
                 if let Some(group) = &sheet.orphan_group {
                     pass.set_bind_group(1, group, &[]);
-                    // One point per landed corner of a dropped triangle.
+                    // One point (or kernel quad) per landed corner of a dropped triangle.
                     pass.draw_indirect(&sheet.draw_args, ORPHAN_DRAW_ARGS_OFFSET);
                 }
             }
@@ -1178,6 +1205,18 @@ mod tests {
                 "raster_small_footprint",
             ),
             (serde_json::json!({"grd": 4}), "known parameters"),
+            (
+                serde_json::json!({"orphan_kernel_px": 1.0}),
+                "splat_orphans",
+            ),
+            (
+                serde_json::json!({"orphan_kernel_px": 9.0, "splat_orphans": true}),
+                "orphan_kernel_px",
+            ),
+            (
+                serde_json::json!({"orphan_kernel_px": -1.0}),
+                "orphan_kernel_px",
+            ),
         ] {
             let msg = parse::<WavefrontParams>(NAME, &json)
                 .expect_err("must fail")
@@ -1187,7 +1226,7 @@ mod tests {
         use caustics_method::MethodParams;
         assert_eq!(
             serde_json::Value::Object(WavefrontParams::default().to_json()),
-            serde_json::json!({"grid": 512, "tolerance": 2e-3, "bounces": 0, "reflections": false, "splat_orphans": false, "raster": "hardware", "raster_small_footprint": 256})
+            serde_json::json!({"grid": 512, "tolerance": 2e-3, "bounces": 0, "reflections": false, "splat_orphans": false, "orphan_kernel_px": 0.0, "raster": "hardware", "raster_small_footprint": 256})
         );
     }
 }

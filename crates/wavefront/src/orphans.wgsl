@@ -9,6 +9,15 @@
 // with `bounces` and `reflections` the sheets still partition the light. On a smooth
 // refractor few triangles are dropped; on a bumpy one, whose total internal
 // reflections speckle the wavefront, these points are a third of the caustic.
+// With `orphan_kernel_px` = sigma > 0 each share is spread instead over a Gaussian of
+// sigma camera pixels, truncated to the square of pixels within 2 sigma (rounded up)
+// of the pixel the vertex lands in and normalised over those pixels' centres: a
+// point's light is a sample of light that spreads (its triangle's corners parted
+// ways), and a lone pixel of it is noise that the eye and HDR-FLIP see at every
+// exposure. On a flat receiver the share's flux is kept exactly.
+
+// Sigma (camera pixels) of the kernel; 0: one-pixel points (the pass draws points).
+override ORPHAN_SIGMA_PX: f32;
 
 struct OrphanOut {
     @builtin(position) clip: vec4<f32>,
@@ -17,12 +26,41 @@ struct OrphanOut {
     @location(1) flux_w: vec3<f32>,
     @location(2) @interpolate(flat) receiver: u32,
     @location(3) @interpolate(flat) side: f32,
+    // With a kernel: where the vertex lands, in pixels (framebuffer coordinates).
+    @location(4) @interpolate(flat) center_px: vec2<f32>,
 }
 
-// One point per landed corner of a dropped triangle: draw_list's orphan entries are
-// 3 × triangle + corner, in that order (the draw starts at the first of them).
+// Half-width of the kernel's square of pixels.
+fn kernel_radius_px() -> f32 {
+    return ceil(2.0 * ORPHAN_SIGMA_PX);
+}
+
+// The kernel's weight at the pixel centre `pixel` for a point landing at `center`: the
+// separable Gaussian over the square of pixels around the landing pixel, divided by its
+// sum over that square, so the weights of the square add up to 1.
+fn kernel_weight(pixel: vec2<f32>, center: vec2<f32>) -> f32 {
+    let r = i32(kernel_radius_px());
+    // (max: the pipeline's constants are folded where sigma is 0 too, never called.)
+    let sigma = max(ORPHAN_SIGMA_PX, 1e-3);
+    let inv = -0.5 / (sigma * sigma);
+    let first = floor(center) + 0.5 - center;
+    var sum = vec2<f32>(0.0);
+    for (var k = -r; k <= r; k++) {
+        let d = first + f32(k);
+        sum += exp(d * d * inv);
+    }
+    let d = pixel - center;
+    let w = exp(d * d * inv);
+    return w.x * w.y / (sum.x * sum.y);
+}
+
+// One point per landed corner of a dropped triangle, or with a kernel the six vertices
+// of its quad: draw_list's orphan entries are 3 × triangle + corner, in that order (the
+// draw starts at the first of them, classify.wgsl's ORPHAN_VERTICES per entry).
 @vertex
-fn vs_orphan(@builtin(vertex_index) entry: u32) -> OrphanOut {
+fn vs_orphan(@builtin(vertex_index) index: u32) -> OrphanOut {
+    let kernel = ORPHAN_SIGMA_PX > 0.0;
+    let entry = select(index, index / 6u, kernel);
     let vi = draw_list[entry];
     let tri = vi / 3u;
     var o: OrphanOut;
@@ -36,6 +74,25 @@ fn vs_orphan(@builtin(vertex_index) entry: u32) -> OrphanOut {
     o.flux_w = v.flux.xyz * (area_old / 3.0);
     o.receiver = v.info.x;
     o.side = v.new_pos.w;
+    if kernel {
+        // Behind the eye a point is clipped; so is its quad.
+        if o.clip.w <= 0.0 {
+            o.clip = vec4<f32>(2.0, 2.0, 2.0, 1.0);
+            return o;
+        }
+        let ndc = o.clip.xyz / o.clip.w;
+        let size = frame.resolution.xy;
+        let center = vec2<f32>(0.5 + 0.5 * ndc.x, 0.5 - 0.5 * ndc.y) * size;
+        o.center_px = center;
+        // The quad's edges on pixel boundaries: it covers exactly the kernel's square.
+        let r = kernel_radius_px();
+        let lo = floor(center) - r;
+        let hi = floor(center) + r + 1.0;
+        let corner = index % 6u;
+        let x = select(lo.x, hi.x, corner == 1u || corner == 3u || corner == 4u);
+        let y = select(lo.y, hi.y, corner == 2u || corner == 4u || corner == 5u);
+        o.clip = vec4<f32>(2.0 * x / size.x - 1.0, 1.0 - 2.0 * y / size.y, ndc.z, 1.0);
+    }
     return o;
 }
 
@@ -43,7 +100,11 @@ fn vs_orphan(@builtin(vertex_index) entry: u32) -> OrphanOut {
 fn fs_orphan(i: OrphanOut) -> @location(0) vec4<f32> {
     count_fragment(i.clip);
     let g = gbuffer_sample(vec2<u32>(i.clip.xy));
-    let radiance = point_splat_radiance(g, i.new_pos, i.flux_w, i.receiver, i.side, sp.tolerance);
+    var flux_w = i.flux_w;
+    if ORPHAN_SIGMA_PX > 0.0 {
+        flux_w *= kernel_weight(i.clip.xy, i.center_px);
+    }
+    let radiance = point_splat_radiance(g, i.new_pos, flux_w, i.receiver, i.side, sp.tolerance);
     if all(radiance == vec3<f32>(0.0)) {
         discard;
     }
