@@ -22,8 +22,8 @@
 //!    cube map, additive, irradiance and luminance × distance;
 //! 5. `orphan_splats` (raster, only with `splat_orphans`): the hits none of whose
 //!    triangles was kept, each as a one-texel splat (`orphans.wgsl`; `orphan_kernel_px`
-//!    widens it to splatting's box kernel), so their light is not lost; the `photon_hits_without_triangles` counter says how many there are
-//!    either way;
+//!    widens it to splatting's box kernel), so their light is not lost; the
+//!    `photon_hits_without_triangles` counter says how many there are either way;
 //! 6. `camera_lookup` (§4.3): ρ/π · E at each camera pixel whose distance from the
 //!    centre matches the map's (`distance_test`).
 //!
@@ -258,7 +258,7 @@ pub const TRIANGLE_COUNTER_DOCS: &[CounterDoc] = &[
     CounterDoc { name: "raster_texels_covered", doc: "with raster = compute: (triangle, cube-map texel) pairs whose texel centre a kept triangle covers, each adding its light (the hardware path's triangles fragments)" },
     CounterDoc { name: "raster_large_footprints", doc: "with raster = compute: (triangle, face) footprints larger than raster_small_footprint, walked by a workgroup of 64 invocations instead of the triangle's own" },
     CounterDoc { name: "raster_footprints_walked_by_lane", doc: "with raster = compute: large footprints the list had no room for, walked by the triangle's own invocation (same light, slower)" },
-    CounterDoc { name: "photon_hits_without_triangles", doc: "valid photon hits none of whose triangles is kept (orphans), counted by the vertex_irradiance pass: their light is lost unless splat_orphans draws each as a one-texel splat (orphan_kernel_px texels a side)" },
+    CounterDoc { name: "photon_hits_without_triangles", doc: "valid photon hits none of whose triangles is kept (orphans), counted by the vertex_irradiance pass: their light is lost unless splat_orphans draws each as a splat of orphan_kernel_px texels a side (one by default)" },
 ];
 
 /// `caustic-triangles` bound to one scene.
