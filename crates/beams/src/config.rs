@@ -56,7 +56,7 @@ method_params! {
         splat_orphans: bool = false;
         /// how the hulls reach the image: hardware (rasterized, additively blended: the paper's) or compute (the workgroups of a beam shade the pixels of its clipped hull's projected polygon with the same per-pixel function and add the light into a fixed-point accumulator with integer atomics, then a full-screen pass resolves it: the same image on every run; bound: 48 bytes of accumulator per camera pixel)
         raster: Raster = Raster::Hardware;
-        /// trace each vertex of the projected grid's main light path once per frame, into a cache that the split oracle and the beams read (the paper's geometry shader traces it again for every triangle that has it as a corner, as an edge midpoint the oracle tests and when its beam is written); the same beams bit for bit, the time differs (bound: (grid x 2^levels + 1)^2 entries of 128 bytes; past 64 MiB it is left out)
+        /// trace each vertex of the projected grid's main light path once per frame, into a cache that the split oracle and the beams read (the paper's geometry shader traces it again for every triangle that has it as a corner, as an edge midpoint the oracle tests and when its beam is written); the same beams bit for bit (through the BVH on a mesh, the same WGSL compiled into another kernel may round a path's last bits differently: bumpy_glass, 8 bounces, 24,883 orphans against 24,877, the same beams), the time differs (bound: (grid x 2^levels + 1)^2 entries of 128 bytes; past 64 MiB it is left out)
         vertex_cache: bool = true;
         /// sigma (px) of the low-pass filter on the surface caustic (Sect. 7), 0 = off (bound: a (4 sigma + 1)^2 gather per pixel)
         surface_filter_px: f64 = 1.0 => closed(0.0, 16.0);

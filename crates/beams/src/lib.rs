@@ -30,8 +30,9 @@
 //! - each grid vertex's main path is traced once per frame (`vertex_cache`, on by
 //!   default; generate.wgsl `trace_lattice`), where the paper's geometry shader traces
 //!   it for every triangle that has it as a corner, again as an oracle midpoint and
-//!   when the leaf's beam is written: the same beams bit for bit, in half the time of
-//!   `generate` on lavapipe;
+//!   when the leaf's beam is written: the same beams bit for bit (through the BVH on a
+//!   mesh, where lavapipe rounds the same WGSL in another kernel differently, but for
+//!   the last bits of a few paths), in half the time of `generate` on lavapipe;
 //! - the split oracle's discontinuity criterion also traces the three edge midpoints
 //!   and splits where their light lands more than `split_hit_px` camera pixels and
 //!   more than `split_hit_rel` of the edge's landing length off the linear prediction

@@ -7,7 +7,7 @@ use beams::{BeamConfig, BeamMethod, BeamParams, BeamRecord, HullKind, Refinement
 use caustics_gpu::readback::read_rgba32f;
 use caustics_gpu::{AdapterChoice, FrameMode, GpuContext, GpuScene, PassProfiler, Renderer};
 use caustics_method::CausticsMethod;
-use caustics_scene::{Scene, Vec3};
+use caustics_scene::Vec3;
 
 fn config() -> BeamConfig {
     BeamConfig {
@@ -36,10 +36,8 @@ struct Run {
 
 impl Run {
     fn new(scene: serde_json::Value, config: &BeamConfig) -> Self {
-        let tmp = tempfile::tempdir().expect("tempdir");
-        let path = tmp.path().join("scene.json");
-        std::fs::write(&path, scene.to_string()).expect("write scene");
-        let scene = Scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
+        // Mesh paths resolve against the built-in scenes' folder.
+        let scene = caustics_testing::scene(&scene);
         let ctx = GpuContext::new(&AdapterChoice::from_flag_or_env(None))
             .unwrap_or_else(|e| panic!("{e}"));
         let gpu_scene = GpuScene::upload(&ctx, scene.into(), Default::default()).expect("upload");
@@ -180,29 +178,71 @@ fn balls_under_two_suns() -> serde_json::Value {
     })
 }
 
+/// How a run of `the_vertex_cache_changes_no_beam` may differ with the cache and
+/// without it.
+#[derive(Clone, Copy, PartialEq)]
+enum CacheAgreement {
+    /// The same beams byte for byte, image and counters.
+    Exact,
+    /// The same beams and orphans but for the last bits of a few paths: counts within
+    /// 1 %.
+    Rounding,
+}
+
 /// The vertex cache changes where a vertex's main path is traced (once per frame, in
 /// `trace_lattice`), not what it is: with it and without, the same beams byte for byte,
 /// the same image and the same counters, over two frames (the second reads only its own
 /// frame's entries), on a heightfield and on two balls under two lights (the second
-/// light's generation must not read the first's entries: the suns' paths differ); on a
-/// grid that is not a power of two, the same beam count within 1 %. Every vertex read
-/// was traced (no misses), each at most once per light.
+/// light's generation must not read the first's entries: the suns' paths differ). Where
+/// the paths are not bit for bit the same, the counts agree within 1 %: on a grid that
+/// is not a power of two (the cache traces the exact lattice uv), and on the bumpy glass
+/// mesh through the BVH with 4 bounces, split_families and splat_orphans (there the
+/// cached path is the same WGSL compiled into another kernel, and lavapipe may round it
+/// differently: all-methods' setting at 128x96, 8 bounces, gave the same 3,223 beams
+/// and 24,883 orphans against 24,877; here, 788 beams and 3,831 orphans either way).
+/// Every vertex read was traced (no misses), each at most once per light.
 #[test]
 fn the_vertex_cache_changes_no_beam() {
-    for (name, scene, grid) in [
-        ("water_pool", builtin("water_pool", 64, 48), 8),
-        ("balls_under_two_suns", balls_under_two_suns(), 8),
+    use CacheAgreement::{Exact, Rounding};
+    fn plain(_: &mut BeamConfig) {}
+    fn bvh_mesh(c: &mut BeamConfig) {
+        c.beams.tracer = beams::Tracer::Bvh;
+        c.beams.bounces = 4;
+        c.beams.splat_orphans = true;
+        c.refinement.split_families = true;
+    }
+    type Tweak = fn(&mut BeamConfig);
+    let cases: [(&str, serde_json::Value, u32, Tweak, CacheAgreement); 4] = [
+        ("water_pool", builtin("water_pool", 64, 48), 8, plain, Exact),
+        (
+            "balls_under_two_suns",
+            balls_under_two_suns(),
+            8,
+            plain,
+            Exact,
+        ),
         // A grid that is not a power of two: lattice uvs are not exact in binary.
         (
             "sphere_on_plane grid=6",
             builtin("sphere_on_plane", 64, 48),
             6,
+            plain,
+            Rounding,
         ),
-    ] {
+        (
+            "bumpy_glass tracer=bvh",
+            builtin("bumpy_glass", 64, 48),
+            8,
+            bvh_mesh,
+            Rounding,
+        ),
+    ];
+    for (name, scene, grid, tweak, agreement) in cases {
         let runs = [true, false].map(|cache| {
             let mut c = config();
             c.beams.grid = grid;
             c.beams.vertex_cache = cache;
+            tweak(&mut c);
             let mut run = Run::new(scene.clone(), &c);
             run.frame();
             run.frame();
@@ -212,7 +252,7 @@ fn the_vertex_cache_changes_no_beam() {
             .each_ref()
             .map(|r| r.method.read_beams(&r.ctx).expect("beams"));
         assert!(beams[0].len() > 50, "{name}: only {} beams", beams[0].len());
-        if grid == 8 {
+        if agreement == Exact {
             assert_eq!(
                 bytemuck::cast_slice::<BeamRecord, u8>(&beams[0]),
                 bytemuck::cast_slice::<BeamRecord, u8>(&beams[1]),
@@ -239,14 +279,29 @@ fn the_vertex_cache_changes_no_beam() {
             traced > 0 && traced <= lights * lattice,
             "{name}: {traced} vertex paths traced, {lights} light(s) of a lattice of {lattice}"
         );
-        if grid == 8 {
-            assert_eq!(counters[0], counters[1], "{name}: counters");
-        } else {
-            // Off the power-of-two grid the cache traces at the exact lattice uv, the
-            // path without it at the candidate's (rounded) one: the same beams but
-            // for the last bits.
-            let (a, b) = (counters[0]["beams"] as f64, counters[1]["beams"] as f64);
-            assert!((a - b).abs() <= 0.01 * b, "{name}: {a} beams against {b}");
+        match agreement {
+            Exact => assert_eq!(counters[0], counters[1], "{name}: counters"),
+            Rounding => {
+                eprintln!(
+                    "{name}: beams {:?}, orphans {:?} (with the cache, without)",
+                    counters.each_ref().map(|c| c["beams"]),
+                    counters.each_ref().map(|c| c.get("orphans").copied())
+                );
+                // (`orphans` is counted only with splat_orphans.)
+                for key in ["beams", "orphans"] {
+                    let [a, b] = counters
+                        .each_ref()
+                        .map(|c| c.get(key).copied().unwrap_or(0) as f64);
+                    assert!((a - b).abs() <= 0.01 * b, "{name}: {a} {key} against {b}");
+                }
+                if name.starts_with("bumpy_glass") {
+                    assert!(
+                        counters[0]["orphans"] > 100,
+                        "{name}: the further families tear nowhere ({} orphans)",
+                        counters[0]["orphans"]
+                    );
+                }
+            }
         }
     }
 }
@@ -316,12 +371,7 @@ fn volume_caustic_matches_the_analytic_inscattering_integral() {
     assert_eq!(run.counter("beams"), 2);
     let volume = run.image("volume");
     let pos = run.positions();
-    let cam = {
-        let tmp = tempfile::tempdir().expect("tempdir");
-        let path = tmp.path().join("s.json");
-        std::fs::write(&path, scene.to_string()).expect("write");
-        Scene::load(&path).expect("scene").camera
-    };
+    let cam = caustics_testing::scene(&scene).camera;
     let (sigma_s, sigma_t) = (0.1f32, 0.1f32);
     // The reference's (and the method's) directional photons start 1 m above the
     // scene's top (y = 2): 1 m of medium before the slab.

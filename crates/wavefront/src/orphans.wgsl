@@ -21,9 +21,10 @@ override ORPHAN_SIGMA_PX: f32;
 
 struct OrphanOut {
     @builtin(position) clip: vec4<f32>,
-    @location(0) new_pos: vec3<f32>,
+    @location(0) @interpolate(flat) new_pos: vec3<f32>,
     // W: the vertex's share of the triangle's flux.
-    @location(1) flux_w: vec3<f32>,
+    // (With a kernel: already divided by the kernel's sum over its square.)
+    @location(1) @interpolate(flat) flux_w: vec3<f32>,
     @location(2) @interpolate(flat) receiver: u32,
     @location(3) @interpolate(flat) side: f32,
     // With a kernel: where the vertex lands, in pixels (framebuffer coordinates).
@@ -35,23 +36,35 @@ fn kernel_radius_px() -> f32 {
     return ceil(2.0 * ORPHAN_SIGMA_PX);
 }
 
-// The kernel's weight at the pixel centre `pixel` for a point landing at `center`: the
-// separable Gaussian over the square of pixels around the landing pixel, divided by its
-// sum over that square, so the weights of the square add up to 1.
-fn kernel_weight(pixel: vec2<f32>, center: vec2<f32>) -> f32 {
+// The kernel's normalisation for a point landing at `center` (framebuffer pixels): one
+// over the separable Gaussian's sum over the square of pixel centres around the landing
+// pixel, so the weights of the square add up to 1. It depends only on where the point
+// lands, so the vertex shader computes it once for the quad.
+fn kernel_inv_sum(center: vec2<f32>) -> f32 {
     let r = i32(kernel_radius_px());
-    // (max: the pipeline's constants are folded where sigma is 0 too, never called.)
-    let sigma = max(ORPHAN_SIGMA_PX, 1e-3);
-    let inv = -0.5 / (sigma * sigma);
+    let inv = kernel_exponent_scale();
     let first = floor(center) + 0.5 - center;
     var sum = vec2<f32>(0.0);
     for (var k = -r; k <= r; k++) {
         let d = first + f32(k);
         sum += exp(d * d * inv);
     }
+    return 1.0 / (sum.x * sum.y);
+}
+
+// -1 / (2 sigma^2). (max: the pipeline's constants are folded where sigma is 0 too,
+// never called.)
+fn kernel_exponent_scale() -> f32 {
+    let sigma = max(ORPHAN_SIGMA_PX, 1e-3);
+    return -0.5 / (sigma * sigma);
+}
+
+// The kernel's unnormalised weight at the pixel centre `pixel` for a point landing at
+// `center`.
+fn kernel_gaussian(pixel: vec2<f32>, center: vec2<f32>) -> f32 {
     let d = pixel - center;
-    let w = exp(d * d * inv);
-    return w.x * w.y / (sum.x * sum.y);
+    let w = exp(d * d * kernel_exponent_scale());
+    return w.x * w.y;
 }
 
 // One point per landed corner of a dropped triangle, or with a kernel the six vertices
@@ -84,6 +97,7 @@ fn vs_orphan(@builtin(vertex_index) index: u32) -> OrphanOut {
         let size = frame.resolution.xy;
         let center = vec2<f32>(0.5 + 0.5 * ndc.x, 0.5 - 0.5 * ndc.y) * size;
         o.center_px = center;
+        o.flux_w *= kernel_inv_sum(center);
         // The quad's edges on pixel boundaries: it covers exactly the kernel's square.
         let r = kernel_radius_px();
         let lo = floor(center) - r;
@@ -102,7 +116,7 @@ fn fs_orphan(i: OrphanOut) -> @location(0) vec4<f32> {
     let g = gbuffer_sample(vec2<u32>(i.clip.xy));
     var flux_w = i.flux_w;
     if ORPHAN_SIGMA_PX > 0.0 {
-        flux_w *= kernel_weight(i.clip.xy, i.center_px);
+        flux_w *= kernel_gaussian(i.clip.xy, i.center_px);
     }
     let radiance = point_splat_radiance(g, i.new_pos, flux_w, i.receiver, i.side, sp.tolerance);
     if all(radiance == vec3<f32>(0.0)) {
