@@ -109,6 +109,14 @@ mod tests {
             ),
             (serde_json::json!({"max_beams": 100}), "max_beams"),
             (
+                serde_json::json!({"orphan_kernel_px": 1.0}),
+                "orphan_kernel_px: 1 spreads the orphans' points, which only splat_orphans = true draws",
+            ),
+            (
+                serde_json::json!({"orphan_kernel_px": 9.0, "splat_orphans": true}),
+                "orphan_kernel_px",
+            ),
+            (
                 serde_json::json!({"split_camera_px": -1.0}),
                 "split_camera_px",
             ),

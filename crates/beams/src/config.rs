@@ -54,6 +54,8 @@ method_params! {
         tracer: Tracer = Tracer::Impostor;
         /// also splat the light of the families a leaf drops (its corners part ways: a silhouette, different paths or receivers): each landed corner as a one-pixel point of a third of the triangle's flux, on the surface caustic (paper: false, that light is lost; bound: max_beams point records)
         splat_orphans: bool = false;
+        /// with splat_orphans: sigma (camera pixels) of a Gaussian each orphan point is spread over instead of one pixel, before the surface filter (truncated at 2 sigma, normalised over the pixels it covers, so a flat receiver keeps its flux); 0 = one-pixel points (paper: no orphans; bound: a 33 x 33 pixel quad per point)
+        orphan_kernel_px: f64 = 0.0 => closed(0.0, 8.0);
         /// how the hulls reach the image: hardware (rasterized, additively blended: the paper's) or compute (the workgroups of a beam shade the pixels of its clipped hull's projected polygon with the same per-pixel function and add the light into a fixed-point accumulator with integer atomics, then a full-screen pass resolves it: the same image on every run; bound: 48 bytes of accumulator per camera pixel)
         raster: Raster = Raster::Hardware;
         /// trace each vertex of the projected grid's main light path once per frame, into a cache that the split oracle and the beams read (the paper's geometry shader traces it again for every triangle that has it as a corner, as an edge midpoint the oracle tests and when its beam is written); the same beams bit for bit (through the BVH on a mesh, the same WGSL compiled into another kernel may round a path's last bits differently: bumpy_glass, 8 bounces, 24,883 orphans against 24,877, the same beams), the time differs (bound: (grid x 2^levels + 1)^2 entries of 128 bytes; past 64 MiB it is left out)
@@ -65,12 +67,19 @@ method_params! {
         /// A(y) is clamped to >= A(0)/max_focus (a point-sampled focus is singular; 1 = no focusing; bound: a millionfold concentration)
         max_focus: f64 = 1000.0 => closed(1.0, 1e6);
     }
-    check = max_beams_hold_the_base_grid;
+    check = beam_params_agree;
 }
 
-/// The rule between parameters: the beam buffers must hold the 2·grid² triangles of
-/// the base grid (refinement only adds to them).
-fn max_beams_hold_the_base_grid(p: &BeamParams) -> Result<(), String> {
+/// The rules between parameters: the beam buffers must hold the 2·grid² triangles of
+/// the base grid (refinement only adds to them), and a kernel for the orphans' points
+/// needs the points.
+fn beam_params_agree(p: &BeamParams) -> Result<(), String> {
+    if p.orphan_kernel_px > 0.0 && !p.splat_orphans {
+        return Err(format!(
+            "orphan_kernel_px: {} spreads the orphans' points, which only splat_orphans = true draws",
+            p.orphan_kernel_px
+        ));
+    }
     let base = 2 * u64::from(p.grid).pow(2);
     if u64::from(p.max_beams) < base {
         return Err(format!(

@@ -1207,6 +1207,9 @@ fn advance() {
     set_dispatch(next);
 }
 
+// Vertices the orphan draw takes per corner: 1 (a point) or 6 (orphan_kernel_px's quad).
+override ORPHAN_VERTICES: u32;
+
 // Indirect draws: every beam's hull (8 triangles, 24 vertices per beam) and, with
 // splat_orphans, every orphan corner (3 points per record); and the compute
 // rasterizer's dispatch.
@@ -1220,8 +1223,9 @@ fn finalize() {
     indirect_args[5] = 1u;
     indirect_args[6] = 0u;
     indirect_args[7] = 0u;
-    // One point per orphan corner (a corner that did not land is culled).
-    indirect_args[8] = 3u * atomicLoad(&control[C_ORPHAN_TOTAL]);
+    // One point per orphan corner (a corner that did not land is culled), or the six
+    // vertices of its kernel's quad (orphan_kernel_px).
+    indirect_args[8] = 3u * ORPHAN_VERTICES * atomicLoad(&control[C_ORPHAN_TOTAL]);
     indirect_args[9] = 1u;
     indirect_args[10] = 0u;
     indirect_args[11] = 0u;

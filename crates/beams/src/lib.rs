@@ -620,6 +620,12 @@ fn storage_buffer(
     })
 }
 
+/// Vertices the orphan draw takes per landed corner: a point, or the two triangles of
+/// its kernel's quad (`orphan_kernel_px`).
+fn orphan_vertices(params: &BeamParams) -> u32 {
+    if params.orphan_kernel_px > 0.0 { 6 } else { 1 }
+}
+
 /// Orphan records (and slots) only where they are written (`splat_orphans`).
 fn orphan_capacity(config: &BeamConfig) -> u64 {
     if config.beams.splat_orphans {
@@ -874,6 +880,7 @@ impl BeamMethod {
                     f64::from(u8::from(config.refinement.split_families)),
                 ),
                 ("VERTEX_CACHE", f64::from(u8::from(vertex_cache_side > 0))),
+                ("ORPHAN_VERTICES", f64::from(orphan_vertices(&config.beams))),
             ])
             .build()?;
 
@@ -881,15 +888,17 @@ impl BeamMethod {
 
         let orphan_points = if config.beams.splat_orphans {
             let shader = Shader::new(ctx, "beams orphans.wgsl", orphans_source())?;
-            Some(
+            let mut builder =
                 RasterPass::builder(ctx, &format!("{name}/orphan_points"), &shader, "vs_orphan")
                     .frame(renderer)
                     .caller_group(1)
-                    .points()
                     .fragment("fs_orphan", &[Some(additive_hdr_target())])
                     .counted()
-                    .build()?,
-            )
+                    .constants(&[("ORPHAN_SIGMA_PX", config.beams.orphan_kernel_px)]);
+            if orphan_vertices(&config.beams) == 1 {
+                builder = builder.points();
+            }
+            Some(builder.build()?)
         } else {
             None
         };

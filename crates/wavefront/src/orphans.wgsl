@@ -10,11 +10,8 @@
 // refractor few triangles are dropped; on a bumpy one, whose total internal
 // reflections speckle the wavefront, these points are a third of the caustic.
 // With `orphan_kernel_px` = sigma > 0 each share is spread instead over a Gaussian of
-// sigma camera pixels, truncated to the square of pixels within 2 sigma (rounded up)
-// of the pixel the vertex lands in and normalised over those pixels' centres: a
-// point's light is a sample of light that spreads (its triangle's corners parted
-// ways), and a lone pixel of it is noise that the eye and HDR-FLIP see at every
-// exposure. On a flat receiver the share's flux is kept exactly.
+// sigma camera pixels (frame.wgsl's point kernel: normalised over the pixels it covers,
+// so a flat receiver keeps the share's flux exactly).
 
 // Sigma (camera pixels) of the kernel; 0: one-pixel points (the pass draws points).
 override ORPHAN_SIGMA_PX: f32;
@@ -29,42 +26,6 @@ struct OrphanOut {
     @location(3) @interpolate(flat) side: f32,
     // With a kernel: where the vertex lands, in pixels (framebuffer coordinates).
     @location(4) @interpolate(flat) center_px: vec2<f32>,
-}
-
-// Half-width of the kernel's square of pixels.
-fn kernel_radius_px() -> f32 {
-    return ceil(2.0 * ORPHAN_SIGMA_PX);
-}
-
-// The kernel's normalisation for a point landing at `center` (framebuffer pixels): one
-// over the separable Gaussian's sum over the square of pixel centres around the landing
-// pixel, so the weights of the square add up to 1. It depends only on where the point
-// lands, so the vertex shader computes it once for the quad.
-fn kernel_inv_sum(center: vec2<f32>) -> f32 {
-    let r = i32(kernel_radius_px());
-    let inv = kernel_exponent_scale();
-    let first = floor(center) + 0.5 - center;
-    var sum = vec2<f32>(0.0);
-    for (var k = -r; k <= r; k++) {
-        let d = first + f32(k);
-        sum += exp(d * d * inv);
-    }
-    return 1.0 / (sum.x * sum.y);
-}
-
-// -1 / (2 sigma^2). (max: the pipeline's constants are folded where sigma is 0 too,
-// never called.)
-fn kernel_exponent_scale() -> f32 {
-    let sigma = max(ORPHAN_SIGMA_PX, 1e-3);
-    return -0.5 / (sigma * sigma);
-}
-
-// The kernel's unnormalised weight at the pixel centre `pixel` for a point landing at
-// `center`.
-fn kernel_gaussian(pixel: vec2<f32>, center: vec2<f32>) -> f32 {
-    let d = pixel - center;
-    let w = exp(d * d * kernel_exponent_scale());
-    return w.x * w.y;
 }
 
 // One point per landed corner of a dropped triangle, or with a kernel the six vertices
@@ -93,19 +54,10 @@ fn vs_orphan(@builtin(vertex_index) index: u32) -> OrphanOut {
             o.clip = vec4<f32>(2.0, 2.0, 2.0, 1.0);
             return o;
         }
-        let ndc = o.clip.xyz / o.clip.w;
-        let size = frame.resolution.xy;
-        let center = vec2<f32>(0.5 + 0.5 * ndc.x, 0.5 - 0.5 * ndc.y) * size;
+        let center = clip_to_framebuffer_px(o.clip);
         o.center_px = center;
-        o.flux_w *= kernel_inv_sum(center);
-        // The quad's edges on pixel boundaries: it covers exactly the kernel's square.
-        let r = kernel_radius_px();
-        let lo = floor(center) - r;
-        let hi = floor(center) + r + 1.0;
-        let corner = index % 6u;
-        let x = select(lo.x, hi.x, corner == 1u || corner == 3u || corner == 4u);
-        let y = select(lo.y, hi.y, corner == 2u || corner == 4u || corner == 5u);
-        o.clip = vec4<f32>(2.0 * x / size.x - 1.0, 1.0 - 2.0 * y / size.y, ndc.z, 1.0);
+        o.flux_w *= point_kernel_inv_sum(center, ORPHAN_SIGMA_PX);
+        o.clip = point_kernel_corner_clip(center, ORPHAN_SIGMA_PX, index % 6u, o.clip.z / o.clip.w);
     }
     return o;
 }
@@ -116,7 +68,7 @@ fn fs_orphan(i: OrphanOut) -> @location(0) vec4<f32> {
     let g = gbuffer_sample(vec2<u32>(i.clip.xy));
     var flux_w = i.flux_w;
     if ORPHAN_SIGMA_PX > 0.0 {
-        flux_w *= kernel_gaussian(i.clip.xy, i.center_px);
+        flux_w *= point_kernel_gaussian(i.clip.xy, i.center_px, ORPHAN_SIGMA_PX);
     }
     let radiance = point_splat_radiance(g, i.new_pos, flux_w, i.receiver, i.side, sp.tolerance);
     if all(radiance == vec3<f32>(0.0)) {
