@@ -87,7 +87,8 @@
 //!   no beam for that family and its light is lost, as in the paper (refinement only
 //!   narrows where). `splat_orphans` writes such a family's landed corners as orphan
 //!   records (a third of the triangle's flux each, in candidate order beside the
-//!   beams' prefix sum) and draws them as one-pixel points into the raw surface
+//!   beams' prefix sum) and draws them as one-pixel points (with `orphan_kernel_px`,
+//!   Gaussians of that many pixels: frame.wgsl's point kernel) into the raw surface
 //!   caustic before the filter (`orphans.wgsl`); in a medium their in-scattered light
 //!   stays lost.
 //! - `raster` = compute (issue 17) replaces the hull rasterization by a compute pass of

@@ -53,15 +53,10 @@ fn vs_orphan(@builtin(vertex_index) index: u32) -> OrphanOut {
     out.path_m = o.point[i].w;
     out.receiver = o.receiver[i];
     if kernel {
-        // Behind the eye a point is clipped; so is its quad.
-        if out.clip.w <= 0.0 {
-            out.clip = vec4<f32>(2.0, 2.0, 2.0, 1.0);
-            return out;
-        }
-        let center = clip_to_framebuffer_px(out.clip);
-        out.center_px = center;
-        out.flux_w *= point_kernel_inv_sum(center, ORPHAN_SIGMA_PX);
-        out.clip = point_kernel_corner_clip(center, ORPHAN_SIGMA_PX, index % 6u, out.clip.z / out.clip.w);
+        let k = point_kernel_vertex(out.clip, ORPHAN_SIGMA_PX, index % 6u);
+        out.clip = k.clip;
+        out.center_px = k.center_px;
+        out.flux_w *= k.flux_scale;
     }
     return out;
 }

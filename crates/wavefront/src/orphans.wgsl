@@ -49,15 +49,10 @@ fn vs_orphan(@builtin(vertex_index) index: u32) -> OrphanOut {
     o.receiver = v.info.x;
     o.side = v.new_pos.w;
     if kernel {
-        // Behind the eye a point is clipped; so is its quad.
-        if o.clip.w <= 0.0 {
-            o.clip = vec4<f32>(2.0, 2.0, 2.0, 1.0);
-            return o;
-        }
-        let center = clip_to_framebuffer_px(o.clip);
-        o.center_px = center;
-        o.flux_w *= point_kernel_inv_sum(center, ORPHAN_SIGMA_PX);
-        o.clip = point_kernel_corner_clip(center, ORPHAN_SIGMA_PX, index % 6u, o.clip.z / o.clip.w);
+        let k = point_kernel_vertex(o.clip, ORPHAN_SIGMA_PX, index % 6u);
+        o.clip = k.clip;
+        o.center_px = k.center_px;
+        o.flux_w *= k.flux_scale;
     }
     return o;
 }

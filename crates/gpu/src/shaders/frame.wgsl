@@ -130,12 +130,12 @@ fn point_splat_radiance(g: GSample, p: vec3<f32>, flux_w: vec3<f32>, receiver: u
 // the light of a point hidden there is not (normalising over the pixels that show the
 // receiver instead would bring hidden light into view: measured on bumpy_glass at
 // 128x96, static-grid, sigma 2, relMSE 8.1e-4 -> 1.1e-3). A vertex shader draws the
-// square as a quad of six vertices (`point_kernel_corner_clip`), folds
-// `point_kernel_inv_sum` into the point's flux (it depends only on where the point
-// lands), and the fragment shader multiplies by `point_kernel_gaussian` at its pixel
+// square as a quad of six vertices and folds one over the kernel's sum into the
+// point's flux, which depends only on where the point lands (`point_kernel_vertex`
+// gives both); the fragment shader multiplies by `point_kernel_gaussian` at its pixel
 // centre. A point's light is a sample of light that spreads (its triangle's corners
-// parted ways), and as a lone pixel it is noise that the eye and HDR-FLIP see at
-// every exposure.
+// parted ways), and as a lone pixel it is noise that the eye and HDR-FLIP see at every
+// exposure.
 
 // Half-width (pixels) of the kernel's square around the landing pixel.
 fn point_kernel_radius_px(sigma_px: f32) -> f32 {
@@ -159,6 +159,28 @@ fn point_kernel_corner_clip(center_px: vec2<f32>, sigma_px: f32, corner: u32, nd
     let y = select(lo.y, hi.y, corner == 2u || corner == 4u || corner == 5u);
     let size = frame.resolution.xy;
     return vec4<f32>(2.0 * x / size.x - 1.0, 1.0 - 2.0 * y / size.y, ndc_z, 1.0);
+}
+
+// Vertex `corner` (0..6) of the kernel's quad for a point at clip-space position
+// `clip`: its clip position, where the point lands (framebuffer pixels, for
+// `point_kernel_gaussian`) and the factor its flux takes (`point_kernel_inv_sum`).
+// A point behind the eye is clipped, and so is its quad.
+struct PointKernelVertex {
+    clip: vec4<f32>,
+    center_px: vec2<f32>,
+    flux_scale: f32,
+}
+
+fn point_kernel_vertex(clip: vec4<f32>, sigma_px: f32, corner: u32) -> PointKernelVertex {
+    var v: PointKernelVertex;
+    if clip.w <= 0.0 {
+        v.clip = vec4<f32>(2.0, 2.0, 2.0, 1.0);
+        return v;
+    }
+    v.center_px = clip_to_framebuffer_px(clip);
+    v.flux_scale = point_kernel_inv_sum(v.center_px, sigma_px);
+    v.clip = point_kernel_corner_clip(v.center_px, sigma_px, corner, clip.z / clip.w);
+    return v;
 }
 
 // -1 / (2 sigma^2). (max: a pipeline's constants are folded where sigma is 0 too, and
