@@ -74,12 +74,7 @@ method_params! {
 /// the base grid (refinement only adds to them), and a kernel for the orphans' points
 /// needs the points.
 fn beam_params_agree(p: &BeamParams) -> Result<(), String> {
-    if p.orphan_kernel_px > 0.0 && !p.splat_orphans {
-        return Err(format!(
-            "orphan_kernel_px: {} spreads the orphans' points, which only splat_orphans = true draws",
-            p.orphan_kernel_px
-        ));
-    }
+    caustics_method::params::orphan_kernel_needs_orphans(p.orphan_kernel_px, p.splat_orphans)?;
     let base = 2 * u64::from(p.grid).pow(2);
     if u64::from(p.max_beams) < base {
         return Err(format!(

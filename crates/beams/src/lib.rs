@@ -120,7 +120,7 @@ mod gpu_types;
 
 use caustics_gpu::impostor::{IMPOSTOR_TRACE_WGSL, ImpostorAtlas, ImpostorPass};
 use caustics_gpu::limits::Reservation;
-use caustics_gpu::pass::{ComputePass, RasterPass, Shader};
+use caustics_gpu::pass::{ComputePass, RasterPass, Shader, point_kernel_vertices};
 use caustics_gpu::textures::{HDR_FORMAT, Target, additive_hdr_target, load_attachment};
 use caustics_gpu::wgpu::{self, util::DeviceExt};
 use caustics_gpu::{Frame, GBuffer, GpuContext, GpuError, LightView, Renderer, shader};
@@ -621,12 +621,6 @@ fn storage_buffer(
     })
 }
 
-/// Vertices the orphan draw takes per landed corner: a point, or the two triangles of
-/// its kernel's quad (`orphan_kernel_px`).
-fn orphan_vertices(params: &BeamParams) -> u32 {
-    if params.orphan_kernel_px > 0.0 { 6 } else { 1 }
-}
-
 /// Orphan records (and slots) only where they are written (`splat_orphans`).
 fn orphan_capacity(config: &BeamConfig) -> u64 {
     if config.beams.splat_orphans {
@@ -881,7 +875,10 @@ impl BeamMethod {
                     f64::from(u8::from(config.refinement.split_families)),
                 ),
                 ("VERTEX_CACHE", f64::from(u8::from(vertex_cache_side > 0))),
-                ("ORPHAN_VERTICES", f64::from(orphan_vertices(&config.beams))),
+                (
+                    "ORPHAN_VERTICES",
+                    f64::from(point_kernel_vertices(config.beams.orphan_kernel_px)),
+                ),
             ])
             .build()?;
 
@@ -889,17 +886,16 @@ impl BeamMethod {
 
         let orphan_points = if config.beams.splat_orphans {
             let shader = Shader::new(ctx, "beams orphans.wgsl", orphans_source())?;
-            let mut builder =
+            Some(
                 RasterPass::builder(ctx, &format!("{name}/orphan_points"), &shader, "vs_orphan")
                     .frame(renderer)
                     .caller_group(1)
                     .fragment("fs_orphan", &[Some(additive_hdr_target())])
                     .counted()
-                    .constants(&[("ORPHAN_SIGMA_PX", config.beams.orphan_kernel_px)]);
-            if orphan_vertices(&config.beams) == 1 {
-                builder = builder.points();
-            }
-            Some(builder.build()?)
+                    .constants(&[("ORPHAN_SIGMA_PX", config.beams.orphan_kernel_px)])
+                    .points_or_kernel_quads(config.beams.orphan_kernel_px)
+                    .build()?,
+            )
         } else {
             None
         };

@@ -1095,6 +1095,16 @@ impl<'a> RasterPassBuilder<'a> {
         })
     }
 
+    /// Orphan points as one-pixel points where `sigma_px` is 0, else as the quads of
+    /// frame.wgsl's point kernel (a triangle list of [`point_kernel_vertices`] per point).
+    pub fn points_or_kernel_quads(self, sigma_px: f64) -> Self {
+        if point_kernel_vertices(sigma_px) == 1 {
+            self.points()
+        } else {
+            self
+        }
+    }
+
     /// Depth/stencil state.
     pub fn depth_stencil(mut self, state: wgpu::DepthStencilState) -> Self {
         self.spec.depth_stencil = Some(state);
@@ -1247,6 +1257,12 @@ impl DerefMut for RasterRecorder<'_> {
     fn deref_mut(&mut self) -> &mut Self::Target {
         &mut self.pass
     }
+}
+
+/// Vertices a point takes when drawn with frame.wgsl's point kernel of `sigma_px` camera
+/// pixels: the two triangles of its quad, or one (a point) where `sigma_px` is 0.
+pub fn point_kernel_vertices(sigma_px: f64) -> u32 {
+    if sigma_px > 0.0 { 6 } else { 1 }
 }
 
 #[cfg(test)]

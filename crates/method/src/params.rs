@@ -265,6 +265,18 @@ pub fn check_range(name: &str, value: Option<f64>, range: &Range) -> Result<(), 
     }
 }
 
+/// The rule of an `orphan_kernel_px` that spreads orphan points over a Gaussian of
+/// `sigma_px` camera pixels (wavefront and the beam methods): a kernel only where the
+/// points are drawn (`splat_orphans`).
+pub fn orphan_kernel_needs_orphans(sigma_px: f64, splat_orphans: bool) -> Result<(), String> {
+    if sigma_px > 0.0 && !splat_orphans {
+        return Err(format!(
+            "orphan_kernel_px: {sigma_px} spreads the orphans' points, which only splat_orphans = true draws"
+        ));
+    }
+    Ok(())
+}
+
 /// Parses `params` (a JSON object; `null` = all defaults) into `P`: each key set once,
 /// then every range and rule checked. Errors name the method and the parameter.
 pub fn parse<P: MethodParams>(method: &'static str, params: &Value) -> Result<P, MethodError> {

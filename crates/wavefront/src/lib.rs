@@ -56,7 +56,9 @@ mod sources;
 
 use bytemuck::{Pod, Zeroable};
 use caustics_gpu::limits::Reservation;
-use caustics_gpu::pass::{BindGroupSchema, ComputePass, RasterPass, Shader, groups_2d};
+use caustics_gpu::pass::{
+    BindGroupSchema, ComputePass, RasterPass, Shader, groups_2d, point_kernel_vertices,
+};
 use caustics_gpu::textures::{additive_hdr_target, load_attachment};
 use caustics_gpu::wgpu::{self, util::DeviceExt};
 use caustics_gpu::{Frame, GpuContext, Renderer, shader};
@@ -165,19 +167,7 @@ method_params! {
 /// The rule between parameters: a kernel for the orphans' points only where they are
 /// drawn.
 fn orphan_kernel_needs_orphans(p: &WavefrontParams) -> Result<(), String> {
-    if p.orphan_kernel_px > 0.0 && !p.splat_orphans {
-        return Err(format!(
-            "orphan_kernel_px: {} spreads the orphans' points, which only splat_orphans = true draws",
-            p.orphan_kernel_px
-        ));
-    }
-    Ok(())
-}
-
-/// Vertices the orphans pass draws per landed corner: a point, or the two triangles of
-/// its kernel's quad (`orphan_kernel_px`).
-fn orphan_vertices(params: &WavefrontParams) -> u32 {
-    if params.orphan_kernel_px > 0.0 { 6 } else { 1 }
+    caustics_method::params::orphan_kernel_needs_orphans(p.orphan_kernel_px, p.splat_orphans)
 }
 
 impl Method for Wavefront {
@@ -588,7 +578,10 @@ impl Wavefront {
             .kernels(&["classify_triangles", "scan_chunks", "scatter_chunks"])
             .constants(&[
                 ("SPLAT_ORPHANS", f64::from(u8::from(params.splat_orphans))),
-                ("ORPHAN_VERTICES", f64::from(orphan_vertices(params))),
+                (
+                    "ORPHAN_VERTICES",
+                    f64::from(point_kernel_vertices(params.orphan_kernel_px)),
+                ),
             ])
             .build()?;
         let (splat, compute_bytes) = match params.raster {
@@ -611,17 +604,16 @@ impl Wavefront {
         };
         let orphans = if params.splat_orphans {
             let shader = Shader::new(ctx, "wavefront orphans.wgsl", draw_source(ORPHANS_WGSL))?;
-            let mut builder =
+            Some(
                 RasterPass::builder(ctx, "wavefront/orphan_points", &shader, "vs_orphan")
                     .frame(renderer)
                     .caller_group(1)
                     .fragment("fs_orphan", &[Some(additive_hdr_target())])
                     .counted()
-                    .constants(&[("ORPHAN_SIGMA_PX", params.orphan_kernel_px)]);
-            if orphan_vertices(params) == 1 {
-                builder = builder.points();
-            }
-            Some(builder.build()?)
+                    .constants(&[("ORPHAN_SIGMA_PX", params.orphan_kernel_px)])
+                    .points_or_kernel_quads(params.orphan_kernel_px)
+                    .build()?,
+            )
         } else {
             None
         };
