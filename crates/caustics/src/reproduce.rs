@@ -177,18 +177,27 @@ pub struct ExperimentTime {
     pub kept: usize,
     /// Seconds rendering references.
     pub references_s: f64,
+    /// Seconds of the runs made now (not the kept ones) in their warm-up, timed and
+    /// count frames (result.json's `wall.frames_s`).
+    pub timed_frames_s: f64,
+    /// Seconds of the runs made now in their scoring frame's sub-pixel frames
+    /// (`wall.scoring_frame_s`): with 4×4 or 8×8 offsets, most of a long reproduction.
+    pub scoring_frames_s: f64,
     /// Seconds in all (references, runs, summary).
     pub total_s: f64,
 }
 
 /// The table `reproduce` prints after more than one experiment: each one's share of the
-/// whole, references apart, slowest first.
+/// whole, references apart, and of its runs' time the timed frames and the scoring
+/// frames (the rest is setup, errors, writing and the summary), slowest first.
 pub fn time_table(times: &[ExperimentTime]) -> String {
     use std::fmt::Write as _;
     let all_s: f64 = times.iter().map(|t| t.total_s).sum();
     let refs_s: f64 = times.iter().map(|t| t.references_s).sum();
+    let timed_s: f64 = times.iter().map(|t| t.timed_frames_s).sum();
+    let scoring_s: f64 = times.iter().map(|t| t.scoring_frames_s).sum();
     let mut out = format!(
-        "{} experiments in {all_s:.0} s ({:.1} min; references {refs_s:.0} s):\n\n| experiment | runs | kept | references s | runs and summary s | total s | share |\n|---|---|---|---|---|---|---|\n",
+        "{} experiments in {all_s:.0} s ({:.1} min; references {refs_s:.0} s, timed frames {timed_s:.0} s, scoring frames {scoring_s:.0} s):\n\n| experiment | runs | kept | references s | timed frames s | scoring frames s | runs and summary s | total s | share |\n|---|---|---|---|---|---|---|---|---|\n",
         times.len(),
         all_s / 60.0
     );
@@ -197,11 +206,13 @@ pub fn time_table(times: &[ExperimentTime]) -> String {
     for t in sorted {
         let _ = writeln!(
             out,
-            "| {} | {} | {} | {:.0} | {:.0} | {:.0} | {:.0}% |",
+            "| {} | {} | {} | {:.0} | {:.0} | {:.0} | {:.0} | {:.0} | {:.0}% |",
             t.experiment,
             t.runs,
             t.kept,
             t.references_s,
+            t.timed_frames_s,
+            t.scoring_frames_s,
             t.total_s - t.references_s,
             t.total_s,
             100.0 * t.total_s / all_s.max(f64::MIN_POSITIVE)
@@ -368,6 +379,7 @@ fn reproduce_one(
     let mut statuses = Vec::new();
     let mut kept = 0;
     let mut not_run = 0;
+    let (mut timed_frames_s, mut scoring_frames_s) = (0.0, 0.0);
     for spec in &runs {
         progress.set_message(spec.key());
         let rel = run_rel(spec);
@@ -431,7 +443,11 @@ fn reproduce_one(
                     std::fs::remove_dir_all(&dir)
                         .with_context(|| format!("removing {}", dir.display()))?;
                 }
-                let status = run_one(e, spec, args, out);
+                let (status, wall) = run_one(e, spec, args, out);
+                if let Some(w) = wall {
+                    timed_frames_s += w.frames_s;
+                    scoring_frames_s += w.scoring_frame_s;
+                }
                 // After result.json: the run is complete once this is written.
                 if let Some(stamp) = exe.as_ref().filter(|_| status.status == "done") {
                     stamp.write(&dir)?;
@@ -496,6 +512,8 @@ fn reproduce_one(
             runs: runs.len(),
             kept,
             references_s,
+            timed_frames_s,
+            scoring_frames_s,
             total_s: start.elapsed().as_secs_f64(),
         },
     ))
@@ -785,7 +803,13 @@ fn run_file(spec: &RunSpec) -> &'static str {
     }
 }
 
-fn run_one(e: &Experiment, spec: &RunSpec, args: &ReproduceArgs, out: &Path) -> RunStatus {
+/// Makes one run; with its status, a still run's wall time by phase (for the time table).
+fn run_one(
+    e: &Experiment,
+    spec: &RunSpec,
+    args: &ReproduceArgs,
+    out: &Path,
+) -> (RunStatus, Option<crate::result::RunWall>) {
     let rel = Path::new("runs").join(&spec.slug);
     let o = RunOptions {
         scene: spec.scene.source.display().to_string(),
@@ -828,13 +852,17 @@ fn run_one(e: &Experiment, spec: &RunSpec, args: &ReproduceArgs, out: &Path) -> 
                 crate::resume::drop_exrs(&dir, &result.images);
             }
             let rel = run_rel(spec);
-            status("done", Some(rel.display().to_string()), None)
+            (
+                status("done", Some(rel.display().to_string()), None),
+                result.wall.clone(),
+            )
         }
-        Ok(RunOutcome::Skipped { reason }) => status("skipped", None, Some(reason)),
-        Ok(RunOutcome::Animated { .. }) => {
-            status("done", Some(run_rel(spec).display().to_string()), None)
-        }
-        Err(err) => status("failed", None, Some(crate::error_text(&err))),
+        Ok(RunOutcome::Skipped { reason }) => (status("skipped", None, Some(reason)), None),
+        Ok(RunOutcome::Animated { .. }) => (
+            status("done", Some(run_rel(spec).display().to_string()), None),
+            None,
+        ),
+        Err(err) => (status("failed", None, Some(crate::error_text(&err))), None),
     }
 }
 
@@ -1021,18 +1049,22 @@ mod tests {
             runs: 3,
             kept: 1,
             references_s,
+            timed_frames_s: 0.25 * (total_s - references_s),
+            scoring_frames_s: 0.5 * (total_s - references_s),
             total_s,
         };
         let table = time_table(&[t("quick", 0.0, 100.0), t("slow", 60.0, 300.0)]);
         assert!(
-            table.starts_with("2 experiments in 400 s (6.7 min; references 60 s)"),
+            table.starts_with(
+                "2 experiments in 400 s (6.7 min; references 60 s, timed frames 85 s, scoring frames 170 s)"
+            ),
             "{table}"
         );
         let slow = table
-            .find("| slow | 3 | 1 | 60 | 240 | 300 | 75% |")
+            .find("| slow | 3 | 1 | 60 | 60 | 120 | 240 | 300 | 75% |")
             .expect(&table);
         let quick = table
-            .find("| quick | 3 | 1 | 0 | 100 | 100 | 25% |")
+            .find("| quick | 3 | 1 | 0 | 25 | 50 | 100 | 100 | 25% |")
             .expect(&table);
         assert!(slow < quick, "slowest first:\n{table}");
     }
