@@ -85,10 +85,11 @@ pub struct ReproduceArgs {
     /// hash).
     #[arg(long)]
     pub allow_dirty: bool,
-    /// Start no run after this many seconds (references included): the runs left are
-    /// listed as `not_run` and the summary is written from the rest; the same command
-    /// again keeps the complete runs and does the others. For a leased GPU or a CI job
-    /// with a deadline, where a killed reproduction would leave no summary.
+    /// Start no run after this many seconds from the command's start (every experiment
+    /// it names and their references together, so `all` too stops in time): the runs
+    /// left are listed as `not_run` and each summary is written from the rest; the same
+    /// command again keeps the complete runs and does the others. For a leased GPU or a
+    /// CI job with a deadline, where a killed reproduction would leave no summary.
     #[arg(long, value_name = "SECONDS", value_parser = parse_budget_s, conflicts_with = "summary_only")]
     pub time_budget_s: Option<f64>,
 }
@@ -234,6 +235,8 @@ fn bar(len: u64, what: &str) -> ProgressBar {
 /// Runs `caustics reproduce`. Every experiment named is loaded and validated before the
 /// first run, so a bad file stops everything before any work or write.
 pub fn reproduce(args: &ReproduceArgs) -> Result<Outcome> {
+    // --time-budget-s counts from here, across experiments.
+    let command_start = Instant::now();
     let dir = args
         .experiments
         .clone()
@@ -298,7 +301,7 @@ pub fn reproduce(args: &ReproduceArgs) -> Result<Outcome> {
             continue;
         }
         refuse_dirty_into_committed(&out, args.allow_dirty)?;
-        let (failed, time) = reproduce_one(e, args, shard.unwrap_or((1, 1)), &out)?;
+        let (failed, time) = reproduce_one(e, args, shard.unwrap_or((1, 1)), &out, command_start)?;
         outcome.failed += failed;
         outcome.times.push(time);
         outcome.dirs.push(out);
@@ -331,6 +334,7 @@ fn reproduce_one(
     args: &ReproduceArgs,
     (k, n): (usize, usize),
     out: &Path,
+    command_start: Instant,
 ) -> Result<(usize, ExperimentTime)> {
     let runs = e.shard(k, n);
     let start = Instant::now();
@@ -418,7 +422,7 @@ fn reproduce_one(
             }
             _ if args
                 .time_budget_s
-                .is_some_and(|b| start.elapsed().as_secs_f64() >= b) =>
+                .is_some_and(|b| command_start.elapsed().as_secs_f64() >= b) =>
             {
                 // Left as it is: a stale folder is only replaced by the run that redoes it.
                 not_run += 1;
