@@ -147,9 +147,9 @@ fn declared_commit() -> Option<String> {
 /// binary stayed the same (a `reproduce all` of 3173a72's binary: 17 of all-methods'
 /// 92 runs and ci-smoke's 46 called themselves dirty with the diff of an edit made
 /// beside it, and extended-lights' runs after that edit's commit named the new commit).
-/// Changes under `results/` do not make a build dirty: they are
-/// what runs write, not what they run (a reproduction committed beside others would
-/// otherwise call itself dirty).
+/// Changes under `results/` do not make a build dirty: they are what runs write, not
+/// what they run (a reproduction committed beside others would otherwise call itself
+/// dirty).
 pub fn build() -> Build {
     static BUILD: std::sync::OnceLock<Build> = std::sync::OnceLock::new();
     BUILD.get_or_init(read_build).clone()
