@@ -108,6 +108,8 @@ method_params! {
         split_hit_px: f64 = 1.0 => above(0.0, 16384.0);
         /// edge-midpoint photon hits split only when also off by more than this fraction of the edge's landing length (a beam spreads its flux evenly, while the true irradiance varies across it by about 8x this fraction); 0 = the pixel bound alone (the default: the beam budget keeps the count; bound: the whole edge)
         split_hit_rel: f64 = 0.0 => closed(0.0, 1.0);
+        /// split where the leaf's even irradiance is off from its four children's (their landing areas, from the corners and the edge midpoints the hit test traces) by more than split_hit_px pixels' worth of light, ranked alike (the paper's energy criterion, "convergent beams ... are refined with higher priority", Sect. 4.2, measured as the error it causes; paper: its oracle gives no formula)
+        split_irradiance: bool = true;
         /// split beams that carry much light or focus it (Sect. 4.2)
         split_energy: bool = true;
         /// split while the beam's flux relative to an unrefined beam's (path throughput x 4^-level) times A(0)/A(where seen) exceeds this (the receiver; the narrowest point in a medium; bound: relative flux <= 1 times the largest max_focus)
@@ -129,18 +131,20 @@ impl Refinement {
             split_discontinuity: false,
             split_energy: false,
             split_camera: false,
+            split_irradiance: false,
             beam_budget: 0,
             ..Self::default()
         }
     }
 
     /// The enabled criteria as `split_flags` of `BeamUniforms` (types.wgsl): 1
-    /// discontinuity, 2 energy, 4 camera (`split_families` is a pipeline constant of
-    /// generate.wgsl instead).
+    /// discontinuity, 2 energy, 4 camera, 16 irradiance (generate.wgsl `SPLIT_*`; 8 is
+    /// the reason `split_families` gives, a pipeline constant of generate.wgsl instead).
     pub fn flags(&self) -> u32 {
         (self.split_discontinuity as u32)
             | ((self.split_energy as u32) << 1)
             | ((self.split_camera as u32) << 2)
+            | ((self.split_irradiance as u32) << 4)
     }
 }
 
@@ -221,6 +225,6 @@ mod tests {
         };
         c.check().expect("valid");
         assert_eq!((c.refinement.levels, c.refinement.flags()), (0, 0));
-        assert_eq!(Refinement::default().flags(), 7);
+        assert_eq!(Refinement::default().flags(), 23);
     }
 }

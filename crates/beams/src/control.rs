@@ -84,7 +84,7 @@ const SPLIT_HISTOGRAM: Word = Word {
     )
 };
 
-/// Every word, by index (words 0 to 7 and 53 to 63 are unused).
+/// Every word, by index (words 0 to 7 and 54 to 63 are unused).
 #[rustfmt::skip]
 pub(crate) const CONTROL: &[Word] = &[
     LEVEL,
@@ -119,6 +119,7 @@ pub(crate) const CONTROL: &[Word] = &[
     counter("C_VERTEX_CACHE_MISSES", 50, "vertex_cache_misses", "main paths read from the vertex cache that it had not traced (a defect: 0)"),
     state("C_LATTICE_LISTED", 51, "vertices gather_lattice listed for the vertex cache to trace (this level)"),
     state("C_LATTICE_TRACE", 52, "vertices trace_lattice traces (this level)"),
+    counter("C_SPLIT_IRRADIANCE", 53, "splits_irradiance", "splits asked because the children spread the light unevenly"),
     SPLIT_HISTOGRAM,
 ];
 
@@ -157,6 +158,7 @@ pub const COUNTER_DOCS: &[CounterDoc] = &[
     CounterDoc { name: "splits_discontinuity", doc: "triangles split by the discontinuity criterion: corners partly missing the generators, on different paths, with normals or depths that differ too much, or an edge midpoint whose light lands off the linear prediction (0 in static-grid)" },
     CounterDoc { name: "splits_deferred", doc: "splits the oracle asked for that the beam budget left undone: the triangle stayed a leaf because splits of higher priority used the budget (0 without beam_budget; counted also in splits_*)" },
     CounterDoc { name: "splits_family", doc: "with split_families: triangles split because a light-path family beyond the main path (the Fresnel reflection, the internal reflections of bounces) parts ways at their corners while the main path does not and no other criterion asked (0 in static-grid)" },
+    CounterDoc { name: "splits_irradiance", doc: "with split_irradiance: triangles split because the leaf's even irradiance is off from its four children's (their landing areas) by more than split_hit_px pixels' worth of light (0 in static-grid)" },
     CounterDoc { name: "splits_energy", doc: "triangles split by the energy criterion: the beam's flux relative to an unrefined beam's times how much it focuses where it is seen exceeds split_energy_threshold (0 in static-grid)" },
     CounterDoc { name: "vertex_cache_misses", doc: "main light paths decide or emit read from the vertex cache that no level had traced, read as paths that are not valid (light lost); 0 in a good run" },
     CounterDoc { name: "vertex_paths", doc: "main light paths the vertex cache traced, summed over the lights: one per vertex that some level's corners or split-oracle midpoints needed, traced once (without the cache a vertex is traced again for each triangle that has it as a corner, as an oracle midpoint and when its leaf is emitted); 0 where the cache's lattice of (grid x 2^levels + 1)^2 vertices does not fit its 64 MiB" },
