@@ -530,6 +530,9 @@ fn the_relative_hit_bound_keeps_gently_bending_beams_whole() {
         c.refinement.levels = 3;
         c.refinement.split_energy = false;
         c.refinement.split_camera = false;
+        // The hit test alone: the irradiance test reads the same midpoints but is not
+        // relaxed by the fraction.
+        c.refinement.split_irradiance = false;
         c.refinement.split_hit_rel = rel;
         let mut run = Run::new(scene.clone(), &c);
         run.frame();
@@ -664,6 +667,7 @@ fn the_paper_path_is_the_default_and_unchanged() {
     let mut adaptive = config();
     adaptive.refinement.split_camera_px = 16.0;
     adaptive.refinement.split_hit_rel = 0.0;
+    adaptive.refinement.split_irradiance = false;
     let mut fixed = config();
     fixed.refinement = Refinement::none();
     fixed.beams.grid = 16;
