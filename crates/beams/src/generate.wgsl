@@ -685,7 +685,9 @@ fn split_oracle(c: Candidate, k: Corners, level: u32) -> Split {
                 }
             }
         }
-        if paths_agree && irradiance && k.p[0].end_object != NONE {
+        // Unranked, a deviation ended the loop early (mids incomplete) and the split
+        // is asked already.
+        if paths_agree && irradiance && (ranked || s.reasons == 0u) && k.p[0].end_object != NONE {
             let spread_px = irradiance_error_px(k, mids);
             misplaced_px = max(misplaced_px, spread_px);
             if spread_px > u.split_hit_px {
