@@ -323,7 +323,7 @@ fn split_families_refines_where_the_further_light_parts_ways() {
 /// in beams at the same budget. Its gain in error is resolution-bound: at 1024x768
 /// (`results/reproduce/liktor-table1`, 8e2b26f, lavapipe) water_pool's pixel-averaged
 /// relMSE falls from 0.0776 to 0.0693 and sphere_over_water's from 0.0719 to 0.0676,
-/// bumpy_glass's rises from 0.00471 to 0.00520; at this test's 128x96, where a pixel
+/// bumpy_glass's rises from 0.00471 to 0.00523; at this test's 128x96, where a pixel
 /// holds most of what it resolves, relMSE moves by a few percent either way.
 #[test]
 fn split_irradiance_refines_where_the_children_spread_the_light_unevenly() {
