@@ -24,13 +24,25 @@ fn henyey_greenstein(cos_theta: f32, g: f32) -> f32 {
     return (1.0 - g * g) / (4.0 * PI * d * sqrt(d));
 }
 
+// vertex_irradiance (generate.wgsl `vertex_irradiance`): the corners' irradiance
+// factors are interpolated; set per pass by lib.rs (no default, so a pass built
+// without it fails).
+override VERTEX_IRRADIANCE: bool;
+
 // Irradiance on the plane parallel to the base at height y, for barycentrics bc:
 // Φ(bc) / A(y), with A clamped at A(0)/max_focus (Sect. 5.2; a point sample of a
-// focus is singular).
+// focus is singular). With vertex_irradiance each corner's flux is scaled by its
+// vertex's irradiance over the beam's own where the light lands (hull[i].w): the
+// paper's value where the corners agree with the beam, smooth across beam edges where
+// they do not.
 fn parallel_irradiance(b: Beam, bc: vec3<f32>, y: f32) -> vec3<f32> {
     let a = vec3<f32>(b.v[0].w, b.v[1].w, b.v[2].w);
+    var w = bc;
+    if VERTEX_IRRADIANCE {
+        w *= vec3<f32>(b.hull[0].w, b.hull[1].w, b.hull[2].w);
+    }
     let area = max(abs(area_at(a, y)), a.x / u.max_focus);
-    let flux = bc.x * b.flux[0].xyz + bc.y * b.flux[1].xyz + bc.z * b.flux[2].xyz;
+    let flux = w.x * b.flux[0].xyz + w.y * b.flux[1].xyz + w.z * b.flux[2].xyz;
     return flux / area;
 }
 

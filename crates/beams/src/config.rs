@@ -64,6 +64,10 @@ method_params! {
         surface_filter_px: f64 = 1.0 => closed(0.0, 16.0);
         /// soft-particle fade of volume caustics near surfaces (m), 0 = off (segments are clipped exactly; bound: longer than any scene)
         soft_depth_m: f64 = 0.0 => closed(0.0, 64.0);
+        /// interpolate each beam's irradiance across it from its corners' (after Ernst et al. 2005's smooth interpolation, which Sect. 7 names): a corner's is the flux over the landing area of the beams of its light-path family that share its grid vertex, as a factor on the beam's own clamped by vertex_irradiance_max; off (the paper's): one area function per beam, so the irradiance steps at beam edges, which surface_filter_px blurs (bound: 36 bytes per vertex of the vertex cache's lattice and family, which it needs)
+        vertex_irradiance: bool = false;
+        /// with vertex_irradiance: a corner's irradiance is kept within this factor of its beam's own (where the beams around a vertex differ more, a focus or a fold lies between them and a mean would move light across it; 1 = the beam's own; bound: a millionfold)
+        vertex_irradiance_max: f64 = 1.5 => closed(1.0, 1e6);
         /// A(y) is clamped to >= A(0)/max_focus (a point-sampled focus is singular; 1 = no focusing; bound: a millionfold concentration)
         max_focus: f64 = 1000.0 => closed(1.0, 1e6);
     }

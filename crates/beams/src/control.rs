@@ -15,6 +15,16 @@ pub(crate) const SPLIT_BINS: usize = 1024;
 /// the split-priority histogram.
 pub(crate) const CONTROL_WORDS: usize = SPLIT_HISTOGRAM.index + SPLIT_BINS;
 
+/// Words a lattice vertex holds per light-path family with `vertex_irradiance`, past
+/// the [`CONTROL_WORDS`] (generate.wgsl `vertex_list`): how many beams of
+/// the family have it as a corner, and their slots. The grid's triangles are right
+/// isosceles at every level (midpoint subdivision keeps their shape), so at most
+/// 360° / 45° = 8 leaves meet at a vertex, each with at most one beam per family.
+pub(crate) const VERTEX_LIST_WORDS: usize = 1 + VERTEX_LIST_SLOTS;
+
+/// Beam slots a lattice vertex lists per family (see [`VERTEX_LIST_WORDS`]).
+pub(crate) const VERTEX_LIST_SLOTS: usize = 8;
+
 /// Light-path families of a leaf (path.wgsl `FAMILY_*`): the main path, the Fresnel
 /// reflection at the first interface, one per internal reflection count 1..=MAX_BOUNCES.
 pub(crate) const FAMILIES: usize = 2 + MAX_BOUNCES as usize;
@@ -201,6 +211,11 @@ pub(crate) fn wgsl() -> String {
             w.wgsl, w.index, w.doc
         ));
     }
+    out.push_str(&format!(
+        "const C_VERTEX_LISTS: u32 = {CONTROL_WORDS}u; // vertex_irradiance: per lattice vertex and family, {VERTEX_LIST_WORDS} words (a count, then beam slots)\n\
+         const VERTEX_LIST_WORDS: u32 = {VERTEX_LIST_WORDS}u;\n\
+         const VERTEX_LIST_SLOTS: u32 = {VERTEX_LIST_SLOTS}u;\n"
+    ));
     out
 }
 

@@ -1161,6 +1161,21 @@ fn write_beam(slot: u32, c: Candidate, k: Corners, level: u32, family: u32) {
         b.hull[i] = vec4<f32>(h.pts[i], 1.0);
     }
     b.tris = pack_tris(h);
+    if VERTEX_IRRADIANCE {
+        // The beam is listed at its corners' lattice vertices, and the corners'
+        // entries wait in the hull's unused w for `vertex_irradiance`, which replaces
+        // them with the corners' irradiance factors.
+        let uv = array<vec2<f32>, 3>(c.uv01.xy, c.uv01.zw, c.uv2_level.xy);
+        for (var i = 0u; i < 3u; i++) {
+            let entry = lattice_entry(uv[i]);
+            b.hull[i].w = bitcast<f32>(entry);
+            let r = vertex_list(entry, family);
+            let listed = atomicAdd(&control[r], 1u);
+            if listed < VERTEX_LIST_SLOTS {
+                atomicStore(&control[r + 1u + listed], slot);
+            }
+        }
+    }
     beams[slot] = b;
     atomicAdd(&control[select(C_PRISM, C_TIGHT, h.tight)], 1u);
     atomicAdd(&control[C_BEAMS_PER_LEVEL + min(level, MAX_LEVELS)], 1u);
@@ -1270,6 +1285,90 @@ fn write_orphan(slot: u32, c: Candidate, k: Corners) {
     }
     orphans[slot] = o;
     atomicAdd(&control[C_ORPHAN_CORNERS], landed);
+}
+
+// vertex_irradiance (the smooth interpolation of Ernst et al. 2005 that Sect. 7 names
+// beside its one area function per beam): `emit` lists each beam at its corners'
+// lattice vertices (`write_beam`), and after the last level `vertex_irradiance` gives
+// each corner the irradiance where the light lands around its vertex: the flux of the
+// beams of its family listed there over their landing area (ΔΦ/ΔA, each beam's A at
+// its mean landing height), a flux-weighted mean no focus can blow up (averaging the
+// beams' area functions themselves, Ernst's way, cancels where a fold parts
+// neighbours: sphere_on_plane at 256x192, static 16², flux ratio 0.867 -> 1.855). The
+// corner keeps it as a factor on the beam's own irradiance, clamped to
+// [1/vertex_irradiance_max, vertex_irradiance_max], in the hull's unused w (corner i:
+// hull[i].w), and the shading interpolates the factors across the beam
+// (beam_shading.wgsl `parallel_irradiance`), so the irradiance no longer steps where
+// one beam meets the next. A corner at a T-junction (a coarser neighbour's edge
+// midpoint) averages over the finer beams only.
+override VERTEX_IRRADIANCE: bool;
+override VERTEX_IRRADIANCE_MAX: f32;
+
+// The words of lattice vertex `entry` (lattice_entry's) for `family` past the counters.
+fn vertex_list(entry: u32, family: u32) -> u32 {
+    return C_VERTEX_LISTS + ((entry - 1u) * (FAMILY_INTERNAL + u.bounces) + family) * VERTEX_LIST_WORDS;
+}
+
+// The flux (luminance, W) of beam `s` and its area (m²) at its mean landing height,
+// clamped as the shading clamps it.
+fn beam_landing(s: u32) -> vec2<f32> {
+    let flux = luminance(beams[s].flux[0].xyz + beams[s].flux[1].xyz + beams[s].flux[2].xyz) / 3.0;
+    let a = vec3<f32>(beams[s].v[0].w, beams[s].v[1].w, beams[s].v[2].w);
+    let y = (beams[s].d[0].w + beams[s].d[1].w + beams[s].d[2].w) / 3.0;
+    return vec2<f32>(flux, max(abs(area_at(a, y)), abs(a.x) / u.max_focus));
+}
+
+@compute @workgroup_size(256)
+fn vertex_irradiance(@builtin(global_invocation_id) id: vec3<u32>) {
+    let slot = id.x;
+    if !VERTEX_IRRADIANCE || slot >= min(atomicLoad(&control[C_BEAM_TOTAL]), u.max_beams) {
+        return;
+    }
+    let family = u32(beams[slot].flux[0].w);
+    let own = beam_landing(slot);
+    var factor = vec3<f32>(1.0);
+    for (var i = 0u; i < 3u; i++) {
+        let r = vertex_list(bitcast<u32>(beams[slot].hull[i].w), family);
+        let n = min(atomicLoad(&control[r]), VERTEX_LIST_SLOTS);
+        // The listed beams in slot order, so that the sums, and the image, are the
+        // same on every run whatever order `emit` listed them in.
+        var listed: array<u32, VERTEX_LIST_SLOTS>;
+        for (var j = 0u; j < n; j++) {
+            let s = atomicLoad(&control[r + 1u + j]);
+            var k = j;
+            while k > 0u && listed[k - 1u] > s {
+                listed[k] = listed[k - 1u];
+                k -= 1u;
+            }
+            listed[k] = s;
+        }
+        var sum = vec2<f32>(0.0);
+        for (var j = 0u; j < n; j++) {
+            sum += beam_landing(listed[j]);
+        }
+        // The vertex's irradiance over the beam's own (ΔΦ/ΔA against Φ/A).
+        if own.x > 0.0 && sum.y > 0.0 {
+            // Clamped (vertex_irradiance_max): where the beams around a vertex differ by
+            // more (a focus or a fold between them) a flux-weighted mean moves light
+            // across it; there the corner keeps nearer the beam's own irradiance.
+            factor[i] = clamp((sum.x / sum.y) / (own.x / own.y), 1.0 / VERTEX_IRRADIANCE_MAX, VERTEX_IRRADIANCE_MAX);
+        }
+    }
+    // The beam keeps its flux (each corner's weight integrates to a third of the
+    // cross-section at every height): the factors tilt its irradiance towards its
+    // neighbours' and move no light between beams (unnormalised, water_pool at 192x144,
+    // static 64²: flux ratio 0.983 -> 1.009, HDR-FLIP 0.154 -> 0.185).
+    let lum = vec3<f32>(luminance(beams[slot].flux[0].xyz), luminance(beams[slot].flux[1].xyz),
+                        luminance(beams[slot].flux[2].xyz));
+    let tilted = dot(factor, lum);
+    if tilted > 0.0 {
+        factor *= (lum.x + lum.y + lum.z) / tilted;
+    }
+    // Every read of this beam's entries is done: only this invocation writes its hull,
+    // and the others read fluxes, areas and heights.
+    beams[slot].hull[0].w = factor.x;
+    beams[slot].hull[1].w = factor.y;
+    beams[slot].hull[2].w = factor.z;
 }
 
 // Moves to the next level's list.

@@ -100,6 +100,11 @@
 //!   is the same on every run and within a stated bound of the hardware path's
 //!   (`tests/gpu_beams.rs`); orphan points stay on the rasterizer.
 //!
+//! - the paper uses one area function per beam (Sect. 7: small steps at beam edges,
+//!   hidden by the low-pass filter); `vertex_irradiance` (off by default) gives each
+//!   corner the irradiance of the beams around its grid vertex (ΔΦ/ΔA), as a clamped
+//!   factor on its beam's own that keeps the beam's flux, interpolated across the beam
+//!   (after Ernst et al. 2005, whom Sect. 7 names; generate.wgsl `vertex_irradiance`).
 //! - the paper builds the beams of one light; a scene with several gets the pipeline
 //!   once per light, each as if alone (its own light view and G-buffer, grid, refinement
 //!   and beam budget), into the same images ([`BeamMethod`]); counters are summed over
@@ -109,7 +114,7 @@
 //! `generate` (compute: per light `init_grid`, then per level `gather_lattice`,
 //! `lattice_args` and `trace_lattice` (the vertex cache, [`vertex_cache_side`]),
 //! `decide`, `budget` (with a beam budget), `scan`, `emit`, `advance`, then
-//! `finalize`), `rasterize` (the hulls, one indirect draw per light; with `raster` = compute one indirect dispatch per light,
+//! `vertex_irradiance` (with it) and `finalize`), `rasterize` (the hulls, one indirect draw per light; with `raster` = compute one indirect dispatch per light,
 //! then `resolve`), `orphan_points` (with `splat_orphans`, one indirect draw per light)
 //! and `surface_filter`.
 
@@ -129,8 +134,8 @@ use caustics_method::{Capabilities, CausticsMethod, Counters, MethodError, Unsup
 use caustics_scene::{Scene, Vec3};
 
 pub use config::{BeamConfig, BeamParams, HullKind, MAX_BOUNCES, MAX_LEVELS, Refinement, Tracer};
-use control::CONTROL_WORDS;
 pub use control::COUNTER_DOCS;
+use control::{CONTROL_WORDS, VERTEX_LIST_WORDS};
 pub use gpu_types::BeamRecord;
 use gpu_types::{
     BEAM_BYTES, BeamUniforms, CANDIDATE_BYTES, FilterUniforms, ORPHAN_BYTES, Slot,
@@ -326,6 +331,12 @@ pub struct BeamMethod {
     buffers: Buffers,
     /// Vertices a side of the vertex cache's lattice (0: none).
     vertex_cache_side: u32,
+    /// `vertex_irradiance`: its kernel gives the beams their corners' factors after the
+    /// last level.
+    vertex_irradiance: bool,
+    /// The vertices' beam lists `vertex_irradiance` adds to each light's control
+    /// buffer, in the memory ledger.
+    _vertex_list_memory: Option<Reservation>,
     /// One per scene light, in the scene's order.
     lights: Vec<LightBeams>,
     generate: ComputePass,
@@ -388,10 +399,17 @@ impl HullRaster {
         // medium: lavapipe runs both sides of a branch on a uniform, so every pixel
         // of every hull paid for the scan-plane segment (sphere_on_plane 256x192,
         // static 64^2: rasterize 224.1 -> 171.2 ms without it).
-        let medium = [(
-            "BEAM_MEDIUM",
-            f64::from(u8::from(renderer.scene().scene.medium.is_some())),
-        )];
+        // vertex_irradiance's factors likewise exist only where asked.
+        let shading = [
+            (
+                "BEAM_MEDIUM",
+                f64::from(u8::from(renderer.scene().scene.medium.is_some())),
+            ),
+            (
+                "VERTEX_IRRADIANCE",
+                f64::from(u8::from(config.beams.vertex_irradiance)),
+            ),
+        ];
         match config.beams.raster {
             Raster::Hardware => {
                 // Without a medium a beam lights only the visible point, and only where
@@ -427,7 +445,7 @@ impl HullRaster {
                             ..Default::default()
                         })
                         .counted()
-                        .constants(&medium);
+                        .constants(&shading);
                 if depth_culled {
                     builder = builder.depth_stencil(hull_depth_cull_state());
                 }
@@ -484,7 +502,7 @@ impl HullRaster {
                     .frame(renderer)
                     .caller_group(1)
                     .kernels(&["rasterize"])
-                    .constants(&medium)
+                    .constants(&shading)
                     .build()?;
                 let shader = Shader::new(ctx, "beams resolve.wgsl", resolve_source())?;
                 let resolve = RasterPass::fullscreen(
@@ -606,6 +624,48 @@ fn plan_vertex_cache(ctx: &GpuContext, config: &BeamConfig) -> (u32, Option<Rese
     }
 }
 
+/// The words each light's control buffer holds past the counters for
+/// `vertex_irradiance` (0 without it): a beam list per lattice vertex and
+/// light-path family (control.rs `VERTEX_LIST_WORDS`), held for `lights` lights in the
+/// memory ledger. The lattice is the vertex cache's, so it must be there.
+fn plan_vertex_lists(
+    ctx: &GpuContext,
+    config: &BeamConfig,
+    name: &'static str,
+    vertex_cache_side: u32,
+    lights: usize,
+) -> Result<(u64, Option<Reservation>), MethodError> {
+    if !config.beams.vertex_irradiance {
+        return Ok((0, None));
+    }
+    let param = |message: String| MethodError::Param {
+        method: name,
+        message,
+    };
+    if vertex_cache_side == 0 {
+        return Err(param(format!(
+            "vertex_irradiance finds the beams of a vertex on the vertex cache's lattice, which this run has not: vertex_cache={} and its (grid x 2^levels + 1)^2 = {}^2 entries of {VERTEX_PATH_BYTES} bytes must fit 64 MiB and the device's storage binding; set vertex_cache=true, lower grid or levels, or vertex_irradiance=false",
+            config.beams.vertex_cache,
+            (u64::from(config.beams.grid) << config.refinement.levels) + 1,
+        )));
+    }
+    let families = 2 + u64::from(config.beams.bounces);
+    let words = u64::from(vertex_cache_side).pow(2) * families * VERTEX_LIST_WORDS as u64;
+    let what = format!(
+        "vertex_irradiance: the beam lists of {vertex_cache_side}^2 lattice vertices x {families} light-path families ({} bytes each) beside the control words",
+        VERTEX_LIST_WORDS * 4
+    );
+    let lower = "lower grid, levels or bounces, or vertex_irradiance=false";
+    ctx.limits
+        .storage(&what, (CONTROL_WORDS as u64 + words) * 4, lower)
+        .map_err(|e| param(e.to_string()))?;
+    let memory = ctx
+        .memory
+        .reserve(&what, words * 4 * lights as u64, lower)
+        .map_err(|e| param(e.to_string()))?;
+    Ok((words, Some(memory)))
+}
+
 /// A storage buffer of `size` bytes (at least 16), with `extra` usages.
 fn storage_buffer(
     device: &wgpu::Device,
@@ -663,7 +723,14 @@ struct LightBuffers {
 }
 
 impl LightBuffers {
-    fn new(device: &wgpu::Device, config: &BeamConfig, uniforms: &BeamUniforms) -> Self {
+    /// With `vertex_list_words` words for `vertex_irradiance` past the control
+    /// words (0 without).
+    fn new(
+        device: &wgpu::Device,
+        config: &BeamConfig,
+        uniforms: &BeamUniforms,
+        vertex_list_words: u64,
+    ) -> Self {
         let cap = u64::from(config.beams.max_beams);
         let copy = wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC;
         Self {
@@ -681,7 +748,12 @@ impl LightBuffers {
                 orphan_capacity(config).max(1) * ORPHAN_BYTES,
                 wgpu::BufferUsages::empty(),
             ),
-            control: storage_buffer(device, "beam control", (CONTROL_WORDS * 4) as u64, copy),
+            control: storage_buffer(
+                device,
+                "beam control",
+                (CONTROL_WORDS as u64 + vertex_list_words) * 4,
+                copy,
+            ),
             indirect_args: storage_buffer(
                 device,
                 "beam indirect args",
@@ -834,6 +906,8 @@ impl BeamMethod {
         let atlas = impostor_atlas(ctx, renderer, &impostor_pass, slots, config)?;
         let vertex_cache = plan_vertex_cache(ctx, config);
         let vertex_cache_side = vertex_cache.0;
+        let (vertex_list_words, vertex_list_memory) =
+            plan_vertex_lists(ctx, config, name, vertex_cache_side, views.len())?;
         let b = Buffers::new(ctx, &scene.camera, config, memory, vertex_cache)?;
 
         // Built (once per scene) also for the impostor tracer: the pass binds it either way.
@@ -857,6 +931,7 @@ impl BeamMethod {
                 "scan",
                 "emit",
                 "advance",
+                "vertex_irradiance",
                 "finalize",
             ])
             // The kernels dispatched from the indirect arguments must not also bind
@@ -867,6 +942,7 @@ impl BeamMethod {
             .kernel_groups("budget", &[0, 1])
             .kernel_groups("scan", &[0, 1])
             .kernel_groups("emit", &[0, 1, BVH_GROUP])
+            .kernel_groups("vertex_irradiance", &[0, 1])
             // split_families is compiled in only where asked (generate.wgsl `decide`),
             // and the vertex cache where it is used (`main_path`).
             .constants(&[
@@ -875,6 +951,11 @@ impl BeamMethod {
                     f64::from(u8::from(config.refinement.split_families)),
                 ),
                 ("VERTEX_CACHE", f64::from(u8::from(vertex_cache_side > 0))),
+                (
+                    "VERTEX_IRRADIANCE",
+                    f64::from(u8::from(vertex_list_words > 0)),
+                ),
+                ("VERTEX_IRRADIANCE_MAX", config.beams.vertex_irradiance_max),
                 (
                     "ORPHAN_VERTICES",
                     f64::from(point_kernel_vertices(config.beams.orphan_kernel_px)),
@@ -924,7 +1005,7 @@ impl BeamMethod {
             let light_gbuffer = renderer.gbuffer_pass().light_gbuffer(ctx, view)?;
             let uniforms =
                 BeamUniforms::new(scene, config, index, view, slots, &atlas, vertex_cache_side);
-            let lb = LightBuffers::new(device, config, &uniforms);
+            let lb = LightBuffers::new(device, config, &uniforms, vertex_list_words);
             let generate_group = generate.caller_schema(1)?.bind(
                 device,
                 &[
@@ -969,6 +1050,8 @@ impl BeamMethod {
             atlas,
             buffers: b,
             vertex_cache_side,
+            vertex_irradiance: vertex_list_words > 0,
+            _vertex_list_memory: vertex_list_memory,
             lights,
             generate,
             rasterize,
@@ -1012,10 +1095,11 @@ impl BeamMethod {
 /// One light's control words, read back.
 fn read_control(ctx: &GpuContext, light: &LightBuffers) -> Result<Vec<u32>, MethodError> {
     let control = &light.control;
+    // The counters only, not `vertex_irradiance`'s lists after them.
     Ok(caustics_gpu::readback::read_buffer_u32(
         ctx,
         control,
-        control.size(),
+        (CONTROL_WORDS * 4) as u64,
         "beam control",
     )?)
 }
@@ -1110,9 +1194,14 @@ impl BeamMethod {
         let b = &self.buffers;
         for light in &self.lights {
             let control = &light.buffers.control;
+            let words = (CONTROL_WORDS * 4) as u64;
             frame
                 .encoder
-                .copy_buffer_to_buffer(&b.control_init, 0, control, 0, control.size());
+                .copy_buffer_to_buffer(&b.control_init, 0, control, 0, words);
+            if self.vertex_irradiance {
+                // The lattice vertices' beam lists start empty.
+                frame.encoder.clear_buffer(control, words, None);
+            }
         }
         // Exact tracing reads neither the light G-buffer nor the impostors.
         if self.config.beams.tracer == Tracer::Impostor {
@@ -1160,6 +1249,10 @@ impl BeamMethod {
                 pass.dispatch("scan", [1, 1, 1])?;
                 pass.dispatch_indirect("emit", args, 0)?;
                 pass.dispatch("advance", [1, 1, 1])?;
+            }
+            if self.vertex_irradiance {
+                let cap = self.config.beams.max_beams;
+                pass.dispatch("vertex_irradiance", [cap.div_ceil(256), 1, 1])?;
             }
             pass.dispatch("finalize", [1, 1, 1])?;
         }
