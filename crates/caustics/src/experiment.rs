@@ -817,6 +817,27 @@ impl Experiment {
     }
 }
 
+/// The order in which to make `runs`: scene by scene, in the order the list first
+/// names each scene, and each scene's runs in the list's (the experiment's) order. Ratio and
+/// table figures set runs of different groups on the same scene side by side, and a
+/// software adapter's times drift by tens of percent over minutes on a shared host:
+/// run group by group, liktor-table1's two water_pool runs were made about seven
+/// minutes apart, and the passes both methods share (light G-buffer, impostors,
+/// surface filter) took 1.37-1.54x as long in the later one. Back to back, both see
+/// the same machine. Indices, folders and the manifest's order stay the experiment's.
+pub fn scene_major<'a>(runs: &[&'a RunSpec]) -> Vec<&'a RunSpec> {
+    let mut first_seen: Vec<&str> = Vec::new();
+    for r in runs {
+        if !first_seen.contains(&r.scene.name.as_str()) {
+            first_seen.push(&r.scene.name);
+        }
+    }
+    let mut ordered = runs.to_vec();
+    // Stable: within a scene the experiment's order stays.
+    ordered.sort_by_key(|r| first_seen.iter().position(|s| *s == r.scene.name));
+    ordered
+}
+
 /// Whether a paper figure refers to this run.
 pub fn figure_matches(f: &PaperFigure, r: &RunSpec) -> bool {
     f.scene == r.scene.name

@@ -385,7 +385,7 @@ fn reproduce_one(
     let mut kept = 0;
     let mut not_run = 0;
     let (mut timed_frames_s, mut scoring_frames_s) = (0.0, 0.0);
-    for spec in &runs {
+    for spec in crate::experiment::scene_major(&runs) {
         progress.set_message(spec.key());
         let rel = run_rel(spec);
         let dir = out.join(&rel);
@@ -485,6 +485,8 @@ fn reproduce_one(
             e.def.name
         );
     }
+    // The manifest lists the runs in the experiment's order, not the order made.
+    statuses.sort_by_key(|s| s.index);
     let failed = statuses.iter().filter(|s| s.status == "failed").count();
     let manifest = Manifest {
         schema_version: MANIFEST_VERSION,

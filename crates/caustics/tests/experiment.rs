@@ -656,3 +656,43 @@ fn bad_sequences_name_the_field() {
         "{e}"
     );
 }
+
+#[test]
+fn runs_are_made_scene_by_scene_so_compared_runs_sit_back_to_back() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let p = write(
+        dir.path(),
+        "x",
+        r#"{"name": "x", "runs": [
+            {"label": "a", "scenes": ["ring", "water_pool"], "methods": ["adaptive-beams"]},
+            {"label": "b", "scenes": ["ring", "water_pool"], "methods": ["static-grid"], "params": {"grid": [32, 64]}},
+            {"label": "c", "scenes": ["sphere_on_plane", "ring"], "methods": ["pinhole"]}]}"#,
+    );
+    let e = Experiment::load(&p, 1.0).unwrap_or_else(|e| panic!("{e}"));
+    let all: Vec<_> = e.runs.iter().collect();
+    let made: Vec<(usize, String)> = caustics::experiment::scene_major(&all)
+        .iter()
+        .map(|r| (r.index, r.key()))
+        .collect();
+    let expected: Vec<(usize, String)> = [
+        (0, "ring/adaptive-beams/default"),
+        (2, "ring/static-grid/grid=32"),
+        (3, "ring/static-grid/grid=64"),
+        (7, "ring/pinhole/default"),
+        (1, "water_pool/adaptive-beams/default"),
+        (4, "water_pool/static-grid/grid=32"),
+        (5, "water_pool/static-grid/grid=64"),
+        (6, "sphere_on_plane/pinhole/default"),
+    ]
+    .iter()
+    .map(|(i, k)| (*i, (*k).to_owned()))
+    .collect();
+    assert_eq!(made, expected);
+    // A shard makes its own runs, scene by scene as its list first names them.
+    let shard = e.shard(2, 2);
+    let made: Vec<usize> = caustics::experiment::scene_major(&shard)
+        .iter()
+        .map(|r| r.index)
+        .collect();
+    assert_eq!(made, vec![1, 5, 3, 7]);
+}
