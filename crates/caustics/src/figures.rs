@@ -587,6 +587,30 @@ fn ratio(
                 said.join(", ")
             }
         ));
+        // Time ratios hold only if the machine stayed the same between the two runs:
+        // the harness's own passes are the same work in both, so their ratio is
+        // what the machine changed (or what one method's memory traffic cost the
+        // other passes), beside every time ratio of the pair.
+        let same_work = rn.scene == rd.scene && (rn.width, rn.height) == (rd.width, rd.height);
+        if same_work && measures.iter().any(is_time) {
+            let (a, b) = (base_gpu_ms(rn), base_gpu_ms(rd));
+            if let (Some(a), Some(b)) = (a, b) {
+                let q = a / b;
+                rows.push(vec![
+                    pair.clone(),
+                    BASE_PASSES.into(),
+                    cell(a),
+                    cell(b),
+                    ratio_text(q),
+                ]);
+                if !(1.0 / DRIFT_BOUND..=DRIFT_BOUND).contains(&q) {
+                    d.notes.push(format!(
+                        "{pair}: the harness's own passes, the same work in both runs, took {}× as long in the {num_label} run: its time ratios carry that much of the machine's drift",
+                        ratio_text(q)
+                    ));
+                }
+            }
+        }
     }
     d.table = Some(FigureTable {
         head: vec![
@@ -603,6 +627,35 @@ fn ratio(
     }
     ratio_bars(png, &f.title, &bars, caption)?;
     Ok(true)
+}
+
+/// The ratio table's row of the harness's own passes.
+const BASE_PASSES: &str = "base passes (same work)";
+
+/// How far the base passes' ratio may stray from 1 before a ratio figure says that its
+/// time ratios carry the machine's drift.
+const DRIFT_BOUND: f64 = 1.1;
+
+/// Whether a measure is a time (or a rate from one).
+fn is_time(m: &Measure) -> bool {
+    match m {
+        Measure::Pass(_) => true,
+        Measure::Named(n) => ["method_gpu_ms", "frame_gpu_ms", "fps"].contains(&n.as_str()),
+        _ => false,
+    }
+}
+
+/// The summed median GPU ms of the harness's own passes (`base/…`: clearing the
+/// targets, the camera G-buffer, the shadow map, direct light), the same work in every
+/// run of a scene at one resolution whatever the method.
+fn base_gpu_ms(row: &Row) -> Option<f64> {
+    let v: Vec<f64> = row
+        .pass_gpu_ms
+        .iter()
+        .filter(|(name, _)| name.starts_with("base/"))
+        .map(|(_, s)| s.median)
+        .collect();
+    (!v.is_empty()).then(|| v.iter().sum())
 }
 
 /// A ratio with three decimals, or three significant digits when far from 1.
@@ -861,9 +914,15 @@ mod tests {
                 p10: ms,
                 p90: ms,
             });
+            // The harness's passes: 10 ms, but 13 ms in one run (full, 1000, random):
+            // the machine slowed down while it ran.
+            let slow = full && samples == 1000 && spec.params["sampling"] == "random";
+            let base_ms = if slow { 13.0 } else { 10.0 };
             for (p, v) in [
                 ("pinhole/gather", 0.75 * ms),
                 ("pinhole/prepare_samples", 0.25 * ms),
+                ("base/shadow_map", 0.5 * base_ms),
+                ("base/direct", 0.5 * base_ms),
             ] {
                 r.pass_gpu_ms.insert(
                     p.into(),
@@ -1014,15 +1073,23 @@ mod tests {
         // Ratio: full takes twice the time and has half the relMSE of off, per pair.
         let q = by("filter");
         let table = q.table.as_ref().expect("ratio table");
-        assert_eq!(table.rows.len(), 4 * 2, "{table:?}");
+        // Each pair: its two measures and, as one is a time, the base passes' ratio.
+        assert_eq!(table.rows.len(), 4 * 3, "{table:?}");
         for row in &table.rows {
-            let want = if row[1] == "method_gpu_ms" {
-                "2.000"
-            } else {
-                "0.500"
+            let want = match row[1].as_str() {
+                "method_gpu_ms" => "2.000",
+                BASE_PASSES if row[0].contains("1000") && row[0].contains("random") => "1.300",
+                BASE_PASSES => "1.000",
+                _ => "0.500",
             };
             assert_eq!(row[4], want, "{row:?}");
         }
+        let drift: Vec<&String> = q.notes.iter().filter(|n| n.contains("drift")).collect();
+        assert_eq!(drift.len(), 1, "{:?}", q.notes);
+        assert!(
+            drift[0].contains("1.300×") && drift[0].contains("1000") && drift[0].contains("random"),
+            "{drift:?}"
+        );
         assert!(dir.join("figures/filter.png").is_file());
 
         // Table: one row per run, the chosen columns.
