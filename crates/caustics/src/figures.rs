@@ -605,7 +605,7 @@ fn ratio(
                 ]);
                 if !(1.0 / DRIFT_BOUND..=DRIFT_BOUND).contains(&q) {
                     d.notes.push(format!(
-                        "{pair}: the harness's own passes, the same work in both runs, took {}× as long in the {num_label} run: its time ratios carry that much of the machine's drift",
+                        "{pair}: the harness's own passes, the same work in both runs, took {}× as long in the {num_label} run (the machine drifted between the two, or one method's memory traffic slowed the passes around it): its time ratios are uncertain by as much",
                         ratio_text(q)
                     ));
                 }
@@ -633,7 +633,7 @@ fn ratio(
 const BASE_PASSES: &str = "base passes (same work)";
 
 /// How far the base passes' ratio may stray from 1 before a ratio figure says that its
-/// time ratios carry the machine's drift.
+/// time ratios are uncertain by as much.
 const DRIFT_BOUND: f64 = 1.1;
 
 /// Whether a measure is a time (or a rate from one).
@@ -1084,7 +1084,7 @@ mod tests {
             };
             assert_eq!(row[4], want, "{row:?}");
         }
-        let drift: Vec<&String> = q.notes.iter().filter(|n| n.contains("drift")).collect();
+        let drift: Vec<&String> = q.notes.iter().filter(|n| n.contains("uncertain")).collect();
         assert_eq!(drift.len(), 1, "{:?}", q.notes);
         assert!(
             drift[0].contains("1.300×") && drift[0].contains("1000") && drift[0].contains("random"),
