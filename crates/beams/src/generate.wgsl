@@ -132,6 +132,10 @@ fn init_grid(@builtin(global_invocation_id) id: vec3<u32>) {
         mark_needed(b);
         mark_needed(c);
         mark_needed(d);
+        mark_corner(a);
+        mark_corner(b);
+        mark_corner(c);
+        mark_corner(d);
         if u.levels > 0u {
             if (id.x & 1u) == 0u {
                 mark_midpoints(a, b, c);
@@ -177,8 +181,14 @@ fn trace_corners(c: Candidate, family: u32) -> Corners {
     for (var i = 0u; i < 3u; i++) {
         if family == FAMILY_MAIN {
             k.p[i] = main_path(uv[i]);
-        } else {
+        } else if CACHE_REFLECTED && family == FAMILY_REFLECTED {
+            k.p[i] = cached_path(reflected_entry(lattice_entry(uv[i])));
+        } else if FAMILY_TRACER {
             k.p[i] = trace_path(uv[i], family);
+        } else {
+            // No family is asked for beyond the cached ones (FAMILY_TRACER): a read
+            // here would be a bug, counted as a miss.
+            k.p[i] = cached_path(0u);
         }
     }
     return k;
@@ -196,7 +206,14 @@ fn trace_corners(c: Candidate, family: u32) -> Corners {
 // run in. The vertices a level needs are marked the level before (`init_grid`: the base
 // grid's corners and, with levels to come, its edge midpoints; `emit`: the edge
 // midpoints of a split's children), and `decide` and `emit` read them (`main_path`).
-// The further families are traced where they are asked for, as without the cache.
+// With CACHE_REFLECTED (`reflections` on a scene with a dielectric) the Fresnel
+// reflection is cached alike, in a second lattice of entries after the first: it is
+// traced for the vertices that become corners (`init_grid`: the base grid's; `emit`: a
+// split's new ones), since the leaves of a ranked refinement, and every leaf's beam in
+// `emit`, ask for it at their three corners (water_pool at 1024x768, adaptive-beams:
+// 8,116 candidates each tracing it three times in `decide`, and leaves again in `emit`,
+// against one trace per corner vertex). The internal reflections of `bounces` are
+// traced where they are asked for, as without the cache.
 
 // A vertex's main path (a PathEnd in words, floats as their bits), and the generation
 // it was last needed in and traced in.
@@ -268,6 +285,19 @@ fn mark_needed(uv: vec2<f32>) {
     vertex_paths[lattice_entry(uv)].needed = cache_generation();
 }
 
+// The Fresnel reflection's entry of the vertex whose main-path entry is `i`.
+fn reflected_entry(i: u32) -> u32 {
+    return i + u.vertex_cache_side * u.vertex_cache_side;
+}
+
+// Marks a vertex that is a candidate's corner: with CACHE_REFLECTED its Fresnel
+// reflection is traced before the level's `decide` reads it.
+fn mark_corner(uv: vec2<f32>) {
+    if CACHE_REFLECTED {
+        vertex_paths[reflected_entry(lattice_entry(uv))].needed = cache_generation();
+    }
+}
+
 // Marks the edge midpoints of the triangle (p0, p1, p2): the oracle traces them.
 fn mark_midpoints(p0: vec2<f32>, p1: vec2<f32>, p2: vec2<f32>) {
     mark_needed(0.5 * (p0 + p1));
@@ -281,22 +311,37 @@ fn mark_midpoints(p0: vec2<f32>, p1: vec2<f32>, p2: vec2<f32>) {
 // too).
 override VERTEX_CACHE: bool;
 
+// Whether the vertex cache also holds the Fresnel reflection (see above).
+override CACHE_REFLECTED: bool;
+
+// Whether a leaf may ask for a family the cache does not hold (the internal reflections
+// of `bounces`; the Fresnel reflection of a dielectric where it is not cached): only
+// then do `decide` and `emit` hold a copy of the path tracer, which on lavapipe costs
+// its kernel's every invocation whether it runs or not.
+override FAMILY_TRACER: bool;
+
+// The path cached in entry i (traced this generation: every vertex the refinement reads
+// is marked before it is read; a miss is counted, and reads as a path that is not
+// valid).
+fn cached_path(i: u32) -> PathEnd {
+    if vertex_paths[i].traced == cache_generation() {
+        return unpack_path(vertex_paths[i]);
+    }
+    atomicAdd(&control[C_VERTEX_CACHE_MISSES], 1u);
+    var none: PathEnd;
+    none.valid = false;
+    none.first_object = NONE;
+    none.first_slot = NONE;
+    none.end_object = NONE;
+    return none;
+}
+
 // The main path of the vertex at uv: with the cache, what `trace_lattice` traced (every
 // vertex the refinement reads is marked before it is read: a miss is counted, and reads
 // as a path that is not valid), else traced here.
 fn main_path(uv: vec2<f32>) -> PathEnd {
     if VERTEX_CACHE {
-        let i = lattice_entry(uv);
-        if vertex_paths[i].traced == cache_generation() {
-            return unpack_path(vertex_paths[i]);
-        }
-        atomicAdd(&control[C_VERTEX_CACHE_MISSES], 1u);
-        var none: PathEnd;
-        none.valid = false;
-        none.first_object = NONE;
-        none.first_slot = NONE;
-        none.end_object = NONE;
-        return none;
+        return cached_path(lattice_entry(uv));
     }
     return trace_path(uv, FAMILY_MAIN);
 }
@@ -317,15 +362,22 @@ fn gather_lattice(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let q = vec2<u32>(id.x % side, id.x / side) << vec2<u32>(u.levels - shift);
-    let i = 1u + q.y * u.vertex_cache_side + q.x;
     let generation = cache_generation();
-    if vertex_paths[i].needed != generation || vertex_paths[i].traced == generation {
-        return;
-    }
-    let k = atomicAdd(&control[C_LATTICE_LISTED], 1u);
-    // Past the list's room a vertex stays untraced, and reads count as misses.
-    if k < 4u * u.max_beams {
-        offsets[k >> 2u][k & 3u] = i;
+    // Its main path, then (CACHE_REFLECTED) its Fresnel reflection's entry.
+    let families = select(1u, 2u, CACHE_REFLECTED);
+    for (var f = 0u; f < families; f++) {
+        var i = 1u + q.y * u.vertex_cache_side + q.x;
+        if f == 1u {
+            i = reflected_entry(i);
+        }
+        if vertex_paths[i].needed != generation || vertex_paths[i].traced == generation {
+            continue;
+        }
+        let k = atomicAdd(&control[C_LATTICE_LISTED], 1u);
+        // Past the list's room a vertex stays untraced, and reads count as misses.
+        if k < 4u * u.max_beams {
+            offsets[k >> 2u][k & 3u] = i;
+        }
     }
 }
 
@@ -345,10 +397,18 @@ fn trace_lattice(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let i = offsets[id.x >> 2u][id.x & 3u];
-    let q = vec2<u32>((i - 1u) % u.vertex_cache_side, (i - 1u) / u.vertex_cache_side);
+    // A main-path entry, or past the first lattice a Fresnel reflection's.
+    let lattice = u.vertex_cache_side * u.vertex_cache_side;
+    let reflected = i > lattice;
+    let v = select(i, i - lattice, reflected) - 1u;
+    let q = vec2<u32>(v % u.vertex_cache_side, v / u.vertex_cache_side);
     let uv = vec2<f32>(q) / f32(u.vertex_cache_side - 1u);
-    vertex_paths[i] = pack_path(trace_path(uv, FAMILY_MAIN), cache_generation());
-    atomicAdd(&control[C_VERTEX_PATHS], 1u);
+    // One call site: lavapipe pays for every inlined copy of the tracer.
+    let family = select(FAMILY_MAIN, FAMILY_REFLECTED, reflected);
+    vertex_paths[i] = pack_path(trace_path(uv, family), cache_generation());
+    if !reflected {
+        atomicAdd(&control[C_VERTEX_PATHS], 1u);
+    }
 }
 
 fn corners_geometry(k: Corners) -> BeamGeometry {
@@ -1231,6 +1291,10 @@ fn emit(@builtin(global_invocation_id) id: vec3<u32>) {
             mark_midpoints(m20, m12, p2);
             mark_midpoints(m01, m12, m20);
         }
+        // Its corners' Fresnel reflections were traced at its level; the new ones'.
+        mark_corner(m01);
+        mark_corner(m12);
+        mark_corner(m20);
         return;
     }
     var slot = atomicLoad(&control[C_BEAM_BASE]) + off.y;

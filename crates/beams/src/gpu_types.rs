@@ -140,6 +140,13 @@ pub(crate) struct Slot {
     pub(crate) center: Option<Vec3>,
 }
 
+impl Slot {
+    /// A dielectric: the Fresnel reflection off it is a beam family of its own.
+    pub(crate) fn is_dielectric(&self) -> bool {
+        self.uniform.kind == 1
+    }
+}
+
 /// The scene's caustic generators in object order.
 pub(crate) fn slots(scene: &Scene, gpu_scene: &GpuScene) -> Vec<Slot> {
     let mut out = Vec::new();

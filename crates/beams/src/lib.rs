@@ -331,6 +331,9 @@ pub struct BeamMethod {
     buffers: Buffers,
     /// Vertices a side of the vertex cache's lattice (0: none).
     vertex_cache_side: u32,
+    /// The vertex cache also holds the Fresnel reflection: corners are traced at the
+    /// last level too.
+    cache_reflected: bool,
     /// `vertex_irradiance`: its kernel gives the beams their corners' factors after the
     /// last level.
     vertex_irradiance: bool,
@@ -578,50 +581,79 @@ const VERTEX_CACHE_MAX_BYTES: u64 = 64 << 20;
 
 /// Vertices a side of the vertex cache's lattice (generate.wgsl `trace_lattice`):
 /// grid·2^levels cells a side, the finest the refinement reaches, where every corner and
-/// oracle midpoint lies; 0 where its entries (one per vertex and one for the
-/// generation count) would take more than [`VERTEX_CACHE_MAX_BYTES`] or
-/// `max_binding_bytes`.
-pub fn vertex_cache_side(grid: u32, levels: u32, max_binding_bytes: u64) -> u32 {
+/// oracle midpoint lies; 0 where its entries (one per vertex and cached light-path
+/// family, and one for the generation count) would take more than
+/// [`VERTEX_CACHE_MAX_BYTES`] or `max_binding_bytes`.
+pub fn vertex_cache_side(grid: u32, levels: u32, families: u32, max_binding_bytes: u64) -> u32 {
     // grid <= 256 and levels <= MAX_LEVELS: the side fits a u32 with room.
     let side = u32::try_from((u64::from(grid) << levels) + 1).unwrap_or(u32::MAX);
-    if vertex_cache_bytes(side) <= VERTEX_CACHE_MAX_BYTES.min(max_binding_bytes) {
+    if vertex_cache_bytes(side, families) <= VERTEX_CACHE_MAX_BYTES.min(max_binding_bytes) {
         side
     } else {
         0
     }
 }
 
-/// The vertex cache's buffer bytes for a lattice of `side` vertices a side (one entry
-/// where there is none: the shader declares an array of them).
-fn vertex_cache_bytes(side: u32) -> u64 {
-    (1 + u64::from(side).pow(2)) * VERTEX_PATH_BYTES
+/// The vertex cache's buffer bytes for a lattice of `side` vertices a side and
+/// `families` light-path families (one entry where there is none: the shader declares
+/// an array of them).
+fn vertex_cache_bytes(side: u32, families: u32) -> u64 {
+    (1 + u64::from(families) * u64::from(side).pow(2)) * VERTEX_PATH_BYTES
+}
+
+/// The vertex cache a run gets: its lattice, the families it holds and its bytes in the
+/// memory ledger.
+struct VertexCachePlan {
+    /// Vertices a side (0: no cache).
+    side: u32,
+    /// 1: the main path; 2: also the Fresnel reflection (generate.wgsl
+    /// `CACHE_REFLECTED`).
+    families: u32,
+    memory: Option<Reservation>,
 }
 
 /// The vertex cache for `config` on this device, its bytes held in the memory ledger:
-/// none (side 0) where it would not fit, for it only saves time.
-fn plan_vertex_cache(ctx: &GpuContext, config: &BeamConfig) -> (u32, Option<Reservation>) {
+/// the main path and, where a leaf may ask for it (`reflections` on a scene with a
+/// dielectric generator), the Fresnel reflection; the main path alone where both would
+/// not fit, none (side 0) where that would not either, for it only saves time.
+fn plan_vertex_cache(ctx: &GpuContext, config: &BeamConfig, slots: &[Slot]) -> VertexCachePlan {
+    let none = VertexCachePlan {
+        side: 0,
+        families: 1,
+        memory: None,
+    };
     if !config.beams.vertex_cache {
-        return (0, None);
+        return none;
     }
     let limits = &ctx.limits;
-    let side = vertex_cache_side(
-        config.beams.grid,
-        config.refinement.levels,
-        limits
-            .max_storage_binding_bytes
-            .min(limits.max_buffer_bytes),
-    );
-    if side == 0 {
-        return (0, None);
+    let binding = limits
+        .max_storage_binding_bytes
+        .min(limits.max_buffer_bytes);
+    let reflected = config.beams.reflections && slots.iter().any(Slot::is_dielectric);
+    let families: &[u32] = if reflected { &[2, 1] } else { &[1] };
+    for &families in families {
+        let side = vertex_cache_side(
+            config.beams.grid,
+            config.refinement.levels,
+            families,
+            binding,
+        );
+        if side == 0 {
+            continue;
+        }
+        if let Ok(reservation) = ctx.memory.reserve(
+            "beam vertex cache",
+            vertex_cache_bytes(side, families),
+            "none needed: the cache is left out",
+        ) {
+            return VertexCachePlan {
+                side,
+                families,
+                memory: Some(reservation),
+            };
+        }
     }
-    match ctx.memory.reserve(
-        "beam vertex cache",
-        vertex_cache_bytes(side),
-        "none needed: the cache is left out",
-    ) {
-        Ok(reservation) => (side, Some(reservation)),
-        Err(_) => (0, None),
-    }
+    none
 }
 
 /// The words each light's control buffer holds past the counters for
@@ -783,7 +815,7 @@ impl Buffers {
         camera: &caustics_scene::Camera,
         config: &BeamConfig,
         memory: Reservation,
-        (vertex_cache_side, vertex_cache_memory): (u32, Option<Reservation>),
+        vertex_cache: &mut VertexCachePlan,
     ) -> Result<Self, GpuError> {
         let device = &ctx.device;
         let storage = |label: &str, size: u64| {
@@ -807,8 +839,11 @@ impl Buffers {
             // Children and beam offsets, and splat_orphans' family mask and record
             // offset.
             offsets: storage("beam offsets", cap * 16),
-            vertex_paths: storage("beam vertex cache", vertex_cache_bytes(vertex_cache_side)),
-            _vertex_cache_memory: vertex_cache_memory,
+            vertex_paths: storage(
+                "beam vertex cache",
+                vertex_cache_bytes(vertex_cache.side, vertex_cache.families),
+            ),
+            _vertex_cache_memory: vertex_cache.memory.take(),
             control_init: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("beam control reset"),
                 contents: bytemuck::cast_slice(&[0u32; CONTROL_WORDS]),
@@ -904,11 +939,16 @@ impl BeamMethod {
         let scene = &renderer.scene().scene;
         let impostor_pass = ImpostorPass::new(ctx)?;
         let atlas = impostor_atlas(ctx, renderer, &impostor_pass, slots, config)?;
-        let vertex_cache = plan_vertex_cache(ctx, config);
-        let vertex_cache_side = vertex_cache.0;
+        let mut vertex_cache = plan_vertex_cache(ctx, config, slots);
+        let vertex_cache_side = vertex_cache.side;
+        let cache_reflected = vertex_cache_side > 0 && vertex_cache.families > 1;
+        // The families a leaf may trace itself: the internal reflections, and the
+        // Fresnel reflection of a dielectric where the cache does not hold it.
+        let reflects = config.beams.reflections && slots.iter().any(Slot::is_dielectric);
+        let family_tracer = config.beams.bounces > 0 || (reflects && !cache_reflected);
         let (vertex_list_words, vertex_list_memory) =
             plan_vertex_lists(ctx, config, name, vertex_cache_side, views.len())?;
-        let b = Buffers::new(ctx, &scene.camera, config, memory, vertex_cache)?;
+        let b = Buffers::new(ctx, &scene.camera, config, memory, &mut vertex_cache)?;
 
         // Built (once per scene) also for the impostor tracer: the pass binds it either way.
         let bvh = renderer.scene().triangle_bvh(ctx)?;
@@ -951,6 +991,8 @@ impl BeamMethod {
                     f64::from(u8::from(config.refinement.split_families)),
                 ),
                 ("VERTEX_CACHE", f64::from(u8::from(vertex_cache_side > 0))),
+                ("CACHE_REFLECTED", f64::from(u8::from(cache_reflected))),
+                ("FAMILY_TRACER", f64::from(u8::from(family_tracer))),
                 (
                     "VERTEX_IRRADIANCE",
                     f64::from(u8::from(vertex_list_words > 0)),
@@ -1050,6 +1092,7 @@ impl BeamMethod {
             atlas,
             buffers: b,
             vertex_cache_side,
+            cache_reflected,
             vertex_irradiance: vertex_list_words > 0,
             _vertex_list_memory: vertex_list_memory,
             lights,
@@ -1063,6 +1106,16 @@ impl BeamMethod {
             },
             bytes,
         })
+    }
+
+    /// The light-path families the vertex cache holds: 0 without it, 1 (the main path)
+    /// or 2 (also the Fresnel reflection).
+    pub fn vertex_cache_families(&self) -> u32 {
+        match (self.vertex_cache_side, self.cache_reflected) {
+            (0, _) => 0,
+            (_, false) => 1,
+            (_, true) => 2,
+        }
     }
 
     /// The beams of the last frame, read back, the scene's lights in order (tests and
@@ -1233,9 +1286,12 @@ impl BeamMethod {
             for level in 0..=levels {
                 // The vertices this level needs and the earlier ones did not trace: the
                 // base grid's and its midpoints, then the midpoints of each level's
-                // candidates (its corners were the level before's). The last level of
-                // a refined grid needs none.
-                if self.vertex_cache_side > 0 && (level < levels || levels == 0) {
+                // candidates (its corners were the level before's), and with the
+                // Fresnel reflection cached, the reflected paths of the level's new
+                // corners. The last level of a refined grid needs no midpoints.
+                if self.vertex_cache_side > 0
+                    && (level < levels || levels == 0 || self.cache_reflected)
+                {
                     let side = (self.config.beams.grid << (level + 1).min(levels)) + 1;
                     pass.dispatch("gather_lattice", [(side * side).div_ceil(64), 1, 1])?;
                     pass.dispatch("lattice_args", [1, 1, 1])?;
@@ -1417,15 +1473,26 @@ mod tests {
     fn the_vertex_cache_holds_the_finest_lattice_or_is_left_out() {
         let unlimited = u64::MAX;
         // adaptive-beams' defaults: 16² refined 3 times, 129² entries (2.1 MB).
-        assert_eq!(vertex_cache_side(16, 3, unlimited), 129);
-        assert_eq!(vertex_cache_bytes(129), (1 + 129 * 129) * VERTEX_PATH_BYTES);
+        assert_eq!(vertex_cache_side(16, 3, 1, unlimited), 129);
+        assert_eq!(
+            vertex_cache_bytes(129, 1),
+            (1 + 129 * 129) * VERTEX_PATH_BYTES
+        );
+        // With the Fresnel reflection, twice the entries.
+        assert_eq!(vertex_cache_side(16, 3, 2, unlimited), 129);
+        assert_eq!(
+            vertex_cache_bytes(129, 2),
+            (1 + 2 * 129 * 129) * VERTEX_PATH_BYTES
+        );
         // static-grid's: 64², not refined.
-        assert_eq!(vertex_cache_side(64, 0, unlimited), 65);
-        // 64² refined 3 times: 513² entries of 128 bytes (33.7 MB) fit 64 MiB...
-        assert_eq!(vertex_cache_side(64, 3, unlimited), 513);
-        // ... but not a 32 MiB binding, nor 256² refined 4 times (4,097², 2.1 GB).
-        assert_eq!(vertex_cache_side(64, 3, 32 << 20), 0);
-        assert_eq!(vertex_cache_side(256, MAX_LEVELS, unlimited), 0);
+        assert_eq!(vertex_cache_side(64, 0, 2, unlimited), 65);
+        // 64² refined 3 times: 513² entries of 128 bytes (33.7 MB) fit 64 MiB, once...
+        assert_eq!(vertex_cache_side(64, 3, 1, unlimited), 513);
+        // ... not twice (67.4 MB), nor a 32 MiB binding, nor 256² refined 4 times
+        // (4,097², 2.1 GB).
+        assert_eq!(vertex_cache_side(64, 3, 2, unlimited), 0);
+        assert_eq!(vertex_cache_side(64, 3, 1, 32 << 20), 0);
+        assert_eq!(vertex_cache_side(256, MAX_LEVELS, 1, unlimited), 0);
     }
 
     #[test]

@@ -189,8 +189,8 @@ enum CacheAgreement {
     Rounding,
 }
 
-/// The vertex cache changes where a vertex's main path is traced (once per frame, in
-/// `trace_lattice`), not what it is: with it and without, the same beams byte for byte,
+/// The vertex cache changes where a vertex's main path and its Fresnel reflection are
+/// traced (once per frame, in `trace_lattice`), not what they are: with it and without, the same beams byte for byte,
 /// the same image and the same counters, over two frames (the second reads only its own
 /// frame's entries), on a heightfield and on two balls under two lights (the second
 /// light's generation must not read the first's entries: the suns' paths differ). Where
@@ -248,6 +248,13 @@ fn the_vertex_cache_changes_no_beam() {
             run.frame();
             run
         });
+        // Each scene here has a dielectric, and reflections are on: the Fresnel
+        // reflection is cached beside the main path.
+        assert_eq!(
+            runs.each_ref().map(|r| r.method.vertex_cache_families()),
+            [2, 0],
+            "{name}: families in the vertex cache"
+        );
         let beams = runs
             .each_ref()
             .map(|r| r.method.read_beams(&r.ctx).expect("beams"));
