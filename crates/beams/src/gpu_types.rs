@@ -4,6 +4,7 @@
 
 use bytemuck::{Pod, Zeroable};
 use caustics_gpu::impostor::ImpostorAtlas;
+use caustics_gpu::scene_upload::material_kind;
 use caustics_gpu::{GpuScene, LightView};
 use caustics_scene::{Light, Material, Scene, Shape, Vec3};
 
@@ -143,7 +144,7 @@ pub(crate) struct Slot {
 impl Slot {
     /// A dielectric: the Fresnel reflection off it is a beam family of its own.
     pub(crate) fn is_dielectric(&self) -> bool {
-        self.uniform.kind == 1
+        self.uniform.kind == material_kind::DIELECTRIC
     }
 }
 
@@ -152,8 +153,8 @@ pub(crate) fn slots(scene: &Scene, gpu_scene: &GpuScene) -> Vec<Slot> {
     let mut out = Vec::new();
     for (i, o) in scene.objects.iter().enumerate() {
         let (kind, ior, color) = match scene.material(o) {
-            Material::Dielectric { ior } => (1u32, *ior, Vec3::ONE),
-            Material::Mirror { reflectance } => (2u32, 1.0, *reflectance),
+            Material::Dielectric { ior } => (material_kind::DIELECTRIC, *ior, Vec3::ONE),
+            Material::Mirror { reflectance } => (material_kind::MIRROR, 1.0, *reflectance),
             Material::Diffuse { .. } => continue,
         };
         let bounds = caustics_gpu::impostor::objects_bounds(gpu_scene, &[i]);
