@@ -613,10 +613,10 @@ struct VertexCachePlan {
 }
 
 /// The vertex cache for `config` on this device, its bytes held in the memory ledger:
-/// the main path and, where a leaf may ask for it (`reflections` on a scene with a
-/// dielectric generator), the Fresnel reflection; the main path alone where both would
-/// not fit, none (side 0) where that would not either, for it only saves time.
-fn plan_vertex_cache(ctx: &GpuContext, config: &BeamConfig, slots: &[Slot]) -> VertexCachePlan {
+/// the main path and, where a leaf may ask for it (`reflects`: `reflections` on a scene
+/// with a dielectric generator), the Fresnel reflection; the main path alone where both
+/// would not fit, none (side 0) where that would not either, for it only saves time.
+fn plan_vertex_cache(ctx: &GpuContext, config: &BeamConfig, reflects: bool) -> VertexCachePlan {
     let none = VertexCachePlan {
         side: 0,
         families: 1,
@@ -629,8 +629,7 @@ fn plan_vertex_cache(ctx: &GpuContext, config: &BeamConfig, slots: &[Slot]) -> V
     let binding = limits
         .max_storage_binding_bytes
         .min(limits.max_buffer_bytes);
-    let reflected = config.beams.reflections && slots.iter().any(Slot::is_dielectric);
-    let families: &[u32] = if reflected { &[2, 1] } else { &[1] };
+    let families: &[u32] = if reflects { &[2, 1] } else { &[1] };
     for &families in families {
         let side = vertex_cache_side(
             config.beams.grid,
@@ -815,7 +814,7 @@ impl Buffers {
         camera: &caustics_scene::Camera,
         config: &BeamConfig,
         memory: Reservation,
-        vertex_cache: &mut VertexCachePlan,
+        vertex_cache: VertexCachePlan,
     ) -> Result<Self, GpuError> {
         let device = &ctx.device;
         let storage = |label: &str, size: u64| {
@@ -843,7 +842,7 @@ impl Buffers {
                 "beam vertex cache",
                 vertex_cache_bytes(vertex_cache.side, vertex_cache.families),
             ),
-            _vertex_cache_memory: vertex_cache.memory.take(),
+            _vertex_cache_memory: vertex_cache.memory,
             control_init: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("beam control reset"),
                 contents: bytemuck::cast_slice(&[0u32; CONTROL_WORDS]),
@@ -939,16 +938,17 @@ impl BeamMethod {
         let scene = &renderer.scene().scene;
         let impostor_pass = ImpostorPass::new(ctx)?;
         let atlas = impostor_atlas(ctx, renderer, &impostor_pass, slots, config)?;
-        let mut vertex_cache = plan_vertex_cache(ctx, config, slots);
+        // Whether a leaf may ask for the Fresnel reflection at all.
+        let reflects = config.beams.reflections && slots.iter().any(Slot::is_dielectric);
+        let vertex_cache = plan_vertex_cache(ctx, config, reflects);
         let vertex_cache_side = vertex_cache.side;
         let cache_reflected = vertex_cache_side > 0 && vertex_cache.families > 1;
         // The families a leaf may trace itself: the internal reflections, and the
         // Fresnel reflection of a dielectric where the cache does not hold it.
-        let reflects = config.beams.reflections && slots.iter().any(Slot::is_dielectric);
         let family_tracer = config.beams.bounces > 0 || (reflects && !cache_reflected);
         let (vertex_list_words, vertex_list_memory) =
             plan_vertex_lists(ctx, config, name, vertex_cache_side, views.len())?;
-        let b = Buffers::new(ctx, &scene.camera, config, memory, &mut vertex_cache)?;
+        let b = Buffers::new(ctx, &scene.camera, config, memory, vertex_cache)?;
 
         // Built (once per scene) also for the impostor tracer: the pass binds it either way.
         let bvh = renderer.scene().triangle_bvh(ctx)?;
