@@ -187,6 +187,14 @@ pub struct ExperimentTime {
     pub scoring_frames_s: f64,
     /// Seconds in all (references, runs, summary).
     pub total_s: f64,
+    /// Seconds the kept runs took when they were made (their `result.json`'s
+    /// `wall.total_s`, a sequence's `animation.json` `wall_s`). With `total_s` it is what
+    /// the experiment costs made in one go, which a reproduction resumed over several
+    /// `--time-budget-s` passes never prints at once.
+    pub kept_runs_s: f64,
+    /// Seconds the references found in the cache took to render (their `meta.json`'s
+    /// `seconds`): what a fresh cache would add.
+    pub cached_references_s: f64,
 }
 
 /// The table `reproduce` prints after more than one experiment: each one's share of the
@@ -198,17 +206,30 @@ pub fn time_table(times: &[ExperimentTime]) -> String {
     let refs_s: f64 = times.iter().map(|t| t.references_s).sum();
     let timed_s: f64 = times.iter().map(|t| t.timed_frames_s).sum();
     let scoring_s: f64 = times.iter().map(|t| t.scoring_frames_s).sum();
+    let kept_s: f64 = times.iter().map(|t| t.kept_runs_s).sum();
+    let cached_s: f64 = times.iter().map(|t| t.cached_references_s).sum();
     let mut out = format!(
-        "{} experiments in {all_s:.0} s ({:.1} min; references {refs_s:.0} s, timed frames {timed_s:.0} s, scoring frames {scoring_s:.0} s):\n\n| experiment | runs | kept | references s | timed frames s | scoring frames s | runs and summary s | total s | share |\n|---|---|---|---|---|---|---|---|---|\n",
+        "{} experiments in {all_s:.0} s ({:.1} min; references {refs_s:.0} s, timed frames {timed_s:.0} s, scoring frames {scoring_s:.0} s)",
         times.len(),
         all_s / 60.0
     );
+    if kept_s + cached_s > 0.0 {
+        // What was made earlier counts where the whole is asked for (a reproduction
+        // resumed pass after pass prints only each pass's share).
+        let whole_s = all_s + kept_s + cached_s;
+        let _ = write!(
+            out,
+            "; made in one go with an empty reference cache about {whole_s:.0} s ({:.1} min), with the kept runs' {kept_s:.0} s and the cached references' {cached_s:.0} s as long as they took when made",
+            whole_s / 60.0
+        );
+    }
+    out.push_str(":\n\n| experiment | runs | kept | references s | timed frames s | scoring frames s | runs and summary s | total s | share | kept runs s (when made) | cached references s (when rendered) |\n|---|---|---|---|---|---|---|---|---|---|---|\n");
     let mut sorted: Vec<&ExperimentTime> = times.iter().collect();
     sorted.sort_by(|a, b| b.total_s.total_cmp(&a.total_s));
     for t in sorted {
         let _ = writeln!(
             out,
-            "| {} | {} | {} | {:.0} | {:.0} | {:.0} | {:.0} | {:.0} | {:.0}% |",
+            "| {} | {} | {} | {:.0} | {:.0} | {:.0} | {:.0} | {:.0} | {:.0}% | {:.0} | {:.0} |",
             t.experiment,
             t.runs,
             t.kept,
@@ -217,7 +238,9 @@ pub fn time_table(times: &[ExperimentTime]) -> String {
             t.scoring_frames_s,
             t.total_s - t.references_s,
             t.total_s,
-            100.0 * t.total_s / all_s.max(f64::MIN_POSITIVE)
+            100.0 * t.total_s / all_s.max(f64::MIN_POSITIVE),
+            t.kept_runs_s,
+            t.cached_references_s
         );
     }
     out
@@ -366,7 +389,7 @@ fn reproduce_one(
         );
     }
     let references_started = Instant::now();
-    let (rendered, missing) = ensure_references(e, &runs, args)?;
+    let (rendered, missing, cached_references_s) = ensure_references(e, &runs, args)?;
     let references_s = references_started.elapsed().as_secs_f64();
     crate::resume::mark_unfinished(out)?;
     let build = crate::machine::build();
@@ -383,6 +406,7 @@ fn reproduce_one(
     progress.enable_steady_tick(std::time::Duration::from_millis(500));
     let mut statuses = Vec::new();
     let mut kept = 0;
+    let mut kept_runs_s = 0.0;
     let mut not_run = 0;
     let (mut timed_frames_s, mut scoring_frames_s) = (0.0, 0.0);
     for spec in crate::experiment::scene_major(&runs) {
@@ -409,6 +433,11 @@ fn reproduce_one(
         };
         let status = match crate::resume::completeness(&dir, &expected) {
             Completeness::Complete(result) => {
+                kept_runs_s += match &result {
+                    Some(r) => r.wall.as_ref().map_or(0.0, |w| w.total_s),
+                    None => crate::animate::load(&dir.join(crate::animate::ANIMATION_FILE))
+                        .map_or(0.0, |a| a.wall_s),
+                };
                 if let Some(result) = result.filter(|_| !args.keep_exr) {
                     crate::resume::drop_exrs(&dir, &result.images);
                 }
@@ -522,6 +551,8 @@ fn reproduce_one(
             timed_frames_s,
             scoring_frames_s,
             total_s: start.elapsed().as_secs_f64(),
+            kept_runs_s,
+            cached_references_s,
         },
     ))
 }
@@ -628,9 +659,11 @@ fn ensure_references(
     e: &Experiment,
     runs: &[&RunSpec],
     args: &ReproduceArgs,
-) -> Result<(Vec<String>, Vec<String>)> {
+) -> Result<(Vec<String>, Vec<String>, f64)> {
     let mut seen = BTreeSet::new();
     let (mut rendered, mut missing) = (Vec::new(), Vec::new());
+    // Render seconds of the cached references used, each counted once.
+    let mut cached_s = 0.0;
     for (spec, scene) in runs
         .iter()
         .map(|spec| Ok((spec, reference_scenes(spec)?)))
@@ -673,7 +706,12 @@ fn ensure_references(
                     std::fs::remove_file(&meta)
                         .with_context(|| format!("removing {}", meta.display()))?;
                 }
-                _ => continue,
+                _ => {
+                    if seen.insert(label) {
+                        cached_s += cached.meta.seconds;
+                    }
+                    continue;
+                }
             }
         }
         seen.insert(label.clone());
@@ -724,7 +762,7 @@ fn ensure_references(
             }
         );
     }
-    Ok((rendered, missing))
+    Ok((rendered, missing, cached_s))
 }
 
 /// The manifest of a reproduction killed before it wrote one: a run whose folder holds
@@ -1059,20 +1097,41 @@ mod tests {
             timed_frames_s: 0.25 * (total_s - references_s),
             scoring_frames_s: 0.5 * (total_s - references_s),
             total_s,
+            kept_runs_s: 0.0,
+            cached_references_s: 0.0,
         };
         let table = time_table(&[t("quick", 0.0, 100.0), t("slow", 60.0, 300.0)]);
         assert!(
             table.starts_with(
-                "2 experiments in 400 s (6.7 min; references 60 s, timed frames 85 s, scoring frames 170 s)"
+                "2 experiments in 400 s (6.7 min; references 60 s, timed frames 85 s, scoring frames 170 s):"
+            ),
+            "nothing made earlier, no whole to add up:\n{table}"
+        );
+        let slow = table
+            .find("| slow | 3 | 1 | 60 | 60 | 120 | 240 | 300 | 75% | 0 | 0 |")
+            .expect(&table);
+        let quick = table
+            .find("| quick | 3 | 1 | 0 | 25 | 50 | 100 | 100 | 25% | 0 | 0 |")
+            .expect(&table);
+        assert!(slow < quick, "slowest first:\n{table}");
+
+        // A pass that resumed an earlier one: the kept runs and the cached references
+        // count at what they took when made, so the whole is not the pass's share.
+        let resumed = ExperimentTime {
+            kept_runs_s: 2400.0,
+            cached_references_s: 500.0,
+            ..t("resumed", 0.0, 20.0)
+        };
+        let table = time_table(&[resumed, t("quick", 0.0, 100.0)]);
+        assert!(
+            table.starts_with(
+                "2 experiments in 120 s (2.0 min; references 0 s, timed frames 30 s, scoring frames 60 s); made in one go with an empty reference cache about 3020 s (50.3 min), with the kept runs' 2400 s and the cached references' 500 s as long as they took when made:"
             ),
             "{table}"
         );
-        let slow = table
-            .find("| slow | 3 | 1 | 60 | 60 | 120 | 240 | 300 | 75% |")
-            .expect(&table);
-        let quick = table
-            .find("| quick | 3 | 1 | 0 | 25 | 50 | 100 | 100 | 25% |")
-            .expect(&table);
-        assert!(slow < quick, "slowest first:\n{table}");
+        assert!(
+            table.contains("| resumed | 3 | 1 | 0 | 5 | 10 | 20 | 20 | 17% | 2400 | 500 |"),
+            "{table}"
+        );
     }
 }
