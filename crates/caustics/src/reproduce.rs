@@ -193,7 +193,8 @@ pub struct ExperimentTime {
     /// `--time-budget-s` passes never prints at once.
     pub kept_runs_s: f64,
     /// Seconds the references found in the cache took to render (their `meta.json`'s
-    /// `seconds`): what a fresh cache would add.
+    /// `seconds`): what a fresh cache would add. Each reference counts once per command,
+    /// with the first experiment that renders or finds it.
     pub cached_references_s: f64,
 }
 
@@ -276,6 +277,10 @@ pub fn reproduce(args: &ReproduceArgs) -> Result<Outcome> {
         failed: 0,
         times: Vec::new(),
     };
+    // The reference folders whose render time this command has counted, rendered or
+    // found in the cache: one an earlier experiment rendered, or another found, is not
+    // counted again (the whole the time table adds up would have it twice).
+    let mut references_counted = BTreeSet::new();
     for e in &experiments {
         let out = args.out.join(&e.def.name);
         if args.summary_only {
@@ -325,7 +330,14 @@ pub fn reproduce(args: &ReproduceArgs) -> Result<Outcome> {
             continue;
         }
         refuse_dirty_into_committed(&out, args.allow_dirty)?;
-        let (failed, time) = reproduce_one(e, args, shard.unwrap_or((1, 1)), &out, command_start)?;
+        let (failed, time) = reproduce_one(
+            e,
+            args,
+            shard.unwrap_or((1, 1)),
+            &out,
+            command_start,
+            &mut references_counted,
+        )?;
         outcome.failed += failed;
         outcome.times.push(time);
         outcome.dirs.push(out);
@@ -359,6 +371,7 @@ fn reproduce_one(
     (k, n): (usize, usize),
     out: &Path,
     command_start: Instant,
+    references_counted: &mut BTreeSet<PathBuf>,
 ) -> Result<(usize, ExperimentTime)> {
     let runs = e.shard(k, n);
     let start = Instant::now();
@@ -389,7 +402,8 @@ fn reproduce_one(
         );
     }
     let references_started = Instant::now();
-    let (rendered, missing, cached_references_s) = ensure_references(e, &runs, args)?;
+    let (rendered, missing, cached_references_s) =
+        ensure_references(e, &runs, args, references_counted)?;
     let references_s = references_started.elapsed().as_secs_f64();
     crate::resume::mark_unfinished(out)?;
     let build = crate::machine::build();
@@ -659,10 +673,12 @@ fn ensure_references(
     e: &Experiment,
     runs: &[&RunSpec],
     args: &ReproduceArgs,
+    counted: &mut BTreeSet<PathBuf>,
 ) -> Result<(Vec<String>, Vec<String>, f64)> {
     let mut seen = BTreeSet::new();
     let (mut rendered, mut missing) = (Vec::new(), Vec::new());
-    // Render seconds of the cached references used, each counted once.
+    // Render seconds of the cached references used that this command has not counted yet
+    // (`counted`).
     let mut cached_s = 0.0;
     for (spec, scene) in runs
         .iter()
@@ -707,7 +723,8 @@ fn ensure_references(
                         .with_context(|| format!("removing {}", meta.display()))?;
                 }
                 _ => {
-                    if seen.insert(label) {
+                    seen.insert(label);
+                    if counted.insert(cached.dir.clone()) {
                         cached_s += cached.meta.seconds;
                     }
                     continue;
@@ -723,6 +740,7 @@ fn ensure_references(
         match budget {
             Some(budget) => {
                 let dir = crate::references::cache_dir(&args.references, scene);
+                counted.insert(dir.clone());
                 let progress = bar(budget.photons, &format!("photons, reference {label}"));
                 let tick = |done: u64| progress.set_position(done);
                 let started = Instant::now();
