@@ -2,10 +2,12 @@
 // by level by the split oracle (Sect. 4.2), then each leaf triangle becomes one beam
 // per light-path family with its beam space, area function and hull (Sect. 4.3).
 // The paper refines in a geometry shader with stream-out; here each level is four
-// compute dispatches (decide, scan, emit, advance; with a beam budget, `budget`
-// between decide and scan; with the vertex cache, gather_lattice, lattice_args and
+// compute dispatches (decide, scan, emit, advance; with a beam budget, `budget` between
+// decide and scan; with the vertex cache, gather_lattice, lattice_args and
 // trace_lattice before decide) with a deterministic prefix sum instead of stream-out
-// order, so the same beams land in the same slots every frame.
+// order, so the same beams land in the same slots every frame; `emit` leaves a job in
+// each leaf beam's slot, and after the last level `emit_beams` (and with splat_orphans
+// `emit_orphans`) traces and writes them all, one invocation per record.
 
 @group(1) @binding(6) var<storage, read_write> candidates_a: array<Candidate>;
 @group(1) @binding(7) var<storage, read_write> candidates_b: array<Candidate>;
@@ -23,12 +25,14 @@
 @group(1) @binding(13) var<storage, read_write> orphans: array<Orphan>;
 // Indirect arguments: words 0..3 the dispatch over candidates, 4..7 the hull draw,
 // 8..11 the orphan point draw, 12..15 the compute rasterizer's dispatch, 16..19 the
-// dispatch over the vertices the vertex cache traces (`trace_lattice`).
+// dispatch over the vertices the vertex cache traces (`trace_lattice`), 20..22 and
+// 23..25 the dispatches over the beams and orphan records (`emit_beams`,
+// `emit_orphans`).
 // A group of its own, bound to the real buffer only for the kernels that write it
 // (init_grid, lattice_args, advance, finalize): a buffer cannot be storage and indirect
-// in the same dispatch, so the indirect ones (trace_lattice, decide, emit) and the
-// others see a placeholder here.
-@group(2) @binding(0) var<storage, read_write> indirect_args: array<u32, 20>;
+// in the same dispatch, so the indirect ones (trace_lattice, decide, emit, emit_beams,
+// emit_orphans) and the others see a placeholder here.
+@group(2) @binding(0) var<storage, read_write> indirect_args: array<u32, 26>;
 // The vertex cache (u.vertex_cache_side > 0; without it one entry no kernel touches):
 // entry 0 counts the generations, entry 1 + y·side + x holds the main path of lattice
 // vertex (x, y). See `trace_lattice`.
@@ -1195,7 +1199,7 @@ fn pack_tris(h: Hull) -> vec4<u32> {
     return words;
 }
 
-fn write_beam(slot: u32, c: Candidate, k: Corners, level: u32, family: u32) {
+fn write_beam(slot: u32, c: Candidate, k: Corners, family: u32) {
     let g = corners_geometry(k);
     var b: Beam;
     let ends = end_heights(k, g);
@@ -1238,8 +1242,6 @@ fn write_beam(slot: u32, c: Candidate, k: Corners, level: u32, family: u32) {
     }
     beams[slot] = b;
     atomicAdd(&control[select(C_PRISM, C_TIGHT, h.tight)], 1u);
-    atomicAdd(&control[C_BEAMS_PER_LEVEL + min(level, MAX_LEVELS)], 1u);
-    atomicAdd(&control[C_BEAMS_PER_FAMILY + min(family, FAMILY_INTERNAL + MAX_BOUNCES - 1u)], 1u);
     if rehits > 0u {
         atomicAdd(&control[C_BEAMS_REHIT], 1u);
     }
@@ -1297,36 +1299,71 @@ fn emit(@builtin(global_invocation_id) id: vec3<u32>) {
         mark_corner(m20);
         return;
     }
+    // A leaf: one job per beam and per orphan record it makes, written into the slot
+    // the record will take (the candidate's corners, its level and the family), turned
+    // into the record after the last level by `emit_beams` and `emit_orphans`, one
+    // invocation each. Tracing here would make every candidate of the level pay for
+    // the tracer where most of them split (a GPU's wave waits for its slowest lane;
+    // lavapipe pays again for every dispatch of a kernel holding the tracer and the
+    // hull, empty or not: 7-10 ms at water_pool's 1024x768, once per level).
     var slot = atomicLoad(&control[C_BEAM_BASE]) + off.y;
-    // With splat_orphans, the families traced that emit no beam while some corner of
-    // theirs landed (`decide`).
-    var dropped = 0u;
-    var orphan_slot = 0u;
-    if u.splat_orphans == 1u {
-        dropped = off.z;
-        orphan_slot = atomicLoad(&control[C_ORPHAN_BASE]) + off.w;
-    }
-    // One loop, one trace (see leaf_mask).
+    var orphan_slot = atomicLoad(&control[C_ORPHAN_BASE]) + off.w;
     for (var family = 0u; family < FAMILY_INTERNAL + u.bounces; family++) {
-        let beam = (a & (1u << family)) != 0u;
-        let orphan = (dropped & (1u << family)) != 0u;
-        if !beam && !orphan {
-            continue;
-        }
-        let k = trace_corners(c, family);
-        if beam {
+        let job = vec4<f32>(c.uv2_level.xy, f32(level), f32(family));
+        if (a & (1u << family)) != 0u {
             if slot < u.max_beams {
-                write_beam(slot, c, k, level, family);
+                beams[slot].v[0] = c.uv01;
+                beams[slot].v[1] = job;
+                // Counted here, not when written: `budget` reads the beams of the
+                // coarser levels.
+                atomicAdd(&control[C_BEAMS_PER_LEVEL + min(level, MAX_LEVELS)], 1u);
+                atomicAdd(&control[C_BEAMS_PER_FAMILY + min(family, FAMILY_INTERNAL + MAX_BOUNCES - 1u)], 1u);
             }
             slot += 1u;
         }
-        if orphan {
+        if u.splat_orphans == 1u && (off.z & (1u << family)) != 0u {
             if orphan_slot < u.max_beams {
-                write_orphan(orphan_slot, c, k);
+                orphans[orphan_slot].point[0] = c.uv01;
+                orphans[orphan_slot].point[1] = job;
             }
             orphan_slot += 1u;
         }
     }
+}
+
+// A record's job as `emit` left it in the record's slot: the leaf's corners (uv) and
+// level, and the family.
+struct Job {
+    c: Candidate,
+    family: u32,
+}
+
+fn job(uv01: vec4<f32>, uv2_level_family: vec4<f32>) -> Job {
+    let c = Candidate(uv01, vec4<f32>(uv2_level_family.xyz, 0.0));
+    return Job(c, u32(uv2_level_family.w));
+}
+
+// After the last level, one invocation per beam: the leaf's family traced from its
+// corners into the slot its job was in. The same slots, in candidate order, every frame.
+@compute @workgroup_size(64)
+fn emit_beams(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x >= atomicLoad(&control[C_BEAM_TOTAL]) {
+        return;
+    }
+    let j = job(beams[id.x].v[0], beams[id.x].v[1]);
+    write_beam(id.x, j.c, trace_corners(j.c, j.family), j.family);
+}
+
+// With splat_orphans, after the last level, one invocation per orphan record: the
+// corners of a family its leaf traced but emits no beam for while some corner of
+// theirs landed (`decide`, offsets[].z).
+@compute @workgroup_size(64)
+fn emit_orphans(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x >= atomicLoad(&control[C_ORPHAN_TOTAL]) {
+        return;
+    }
+    let j = job(orphans[id.x].point[0], orphans[id.x].point[1]);
+    write_orphan(id.x, j.c, trace_corners(j.c, j.family));
 }
 
 // The corners of a family the leaf emits no beam for: each landed corner keeps a third
@@ -1442,6 +1479,13 @@ fn advance() {
     atomicStore(&control[C_COUNT], next);
     atomicAdd(&control[C_LEVEL], 1u);
     set_dispatch(next);
+    // emit_beams and emit_orphans (after the last level): one invocation per record.
+    indirect_args[20] = (atomicLoad(&control[C_BEAM_TOTAL]) + 63u) / 64u;
+    indirect_args[21] = 1u;
+    indirect_args[22] = 1u;
+    indirect_args[23] = (atomicLoad(&control[C_ORPHAN_TOTAL]) + 63u) / 64u;
+    indirect_args[24] = 1u;
+    indirect_args[25] = 1u;
 }
 
 // Vertices the orphan draw takes per corner: 1 (a point) or 6 (orphan_kernel_px's quad).

@@ -113,7 +113,9 @@
 //! Passes (names `<method>/<pass>`): `light_gbuffer` (one per light), `impostors`,
 //! `generate` (compute: per light `init_grid`, then per level `gather_lattice`,
 //! `lattice_args` and `trace_lattice` (the vertex cache, [`vertex_cache_side`]),
-//! `decide`, `budget` (with a beam budget), `scan`, `emit`, `advance`, then
+//! `decide`, `budget` (with a beam budget), `scan`, `emit` (the splits' children and
+//! a job per leaf beam), `advance`, then `emit_beams` (one invocation per beam of every
+//! level's leaves), `emit_orphans` (with `splat_orphans`),
 //! `vertex_irradiance` (with it) and `finalize`), `rasterize` (the hulls, one indirect draw per light; with `raster` = compute one indirect dispatch per light,
 //! then `resolve`), `orphan_points` (with `splat_orphans`, one indirect draw per light)
 //! and `surface_filter`.
@@ -307,8 +309,12 @@ const ORPHAN_DRAW_ARGS_OFFSET: u64 = 32;
 const RASTER_DISPATCH_ARGS_OFFSET: u64 = 48;
 /// Byte offset of `trace_lattice`'s dispatch (the vertex cache) in the indirect buffer.
 const LATTICE_DISPATCH_ARGS_OFFSET: u64 = 64;
+/// Byte offset of `emit_beams`'s dispatch (one invocation per beam).
+const BEAM_DISPATCH_ARGS_OFFSET: u64 = 80;
+/// Byte offset of `emit_orphans`'s dispatch (one invocation per orphan record).
+const ORPHAN_DISPATCH_ARGS_OFFSET: u64 = 92;
 /// Bytes of the indirect-arguments buffer (`indirect_args` in generate.wgsl).
-const INDIRECT_ARGS_BYTES: u64 = 80;
+const INDIRECT_ARGS_BYTES: u64 = 104;
 /// u32 words per camera pixel of the compute rasterizer's accumulator (`ACCUM_WORDS` in
 /// rasterize_compute.wgsl and resolve.wgsl): surface and volume RGB, a fixed-point
 /// channel each.
@@ -970,6 +976,8 @@ impl BeamMethod {
                 "budget",
                 "scan",
                 "emit",
+                "emit_beams",
+                "emit_orphans",
                 "advance",
                 "vertex_irradiance",
                 "finalize",
@@ -981,7 +989,9 @@ impl BeamMethod {
             .kernel_groups("decide", &[0, 1, BVH_GROUP])
             .kernel_groups("budget", &[0, 1])
             .kernel_groups("scan", &[0, 1])
-            .kernel_groups("emit", &[0, 1, BVH_GROUP])
+            .kernel_groups("emit", &[0, 1])
+            .kernel_groups("emit_beams", &[0, 1, BVH_GROUP])
+            .kernel_groups("emit_orphans", &[0, 1, BVH_GROUP])
             .kernel_groups("vertex_irradiance", &[0, 1])
             // split_families is compiled in only where asked (generate.wgsl `decide`),
             // and the vertex cache where it is used (`main_path`).
@@ -1306,6 +1316,12 @@ impl BeamMethod {
                 pass.dispatch_indirect("emit", args, 0)?;
                 pass.dispatch("advance", [1, 1, 1])?;
             }
+            // Every level's leaves at once: one dispatch of the tracer and the hull
+            // per light, not one per level.
+            pass.dispatch_indirect("emit_beams", args, BEAM_DISPATCH_ARGS_OFFSET)?;
+            if self.config.beams.splat_orphans {
+                pass.dispatch_indirect("emit_orphans", args, ORPHAN_DISPATCH_ARGS_OFFSET)?;
+            }
             if self.vertex_irradiance {
                 let cap = self.config.beams.max_beams;
                 pass.dispatch("vertex_irradiance", [cap.div_ceil(256), 1, 1])?;
@@ -1511,6 +1527,12 @@ mod tests {
         )));
         assert_eq!(RASTER_DISPATCH_ARGS_OFFSET / 4, 12);
         assert_eq!(LATTICE_DISPATCH_ARGS_OFFSET / 4, 16);
+        assert_eq!(BEAM_DISPATCH_ARGS_OFFSET / 4, 20);
+        assert_eq!(ORPHAN_DISPATCH_ARGS_OFFSET / 4, 23);
+        assert!(
+            GENERATE_WGSL
+                .contains("indirect_args[20] = (atomicLoad(&control[C_BEAM_TOTAL]) + 63u) / 64u;")
+        );
         assert!(GENERATE_WGSL.contains("indirect_args[16] = (n + 63u) / 64u;"));
         assert!(GENERATE_WGSL.contains("indirect_args[12] = min(beams, 32768u);"));
     }

@@ -154,6 +154,48 @@ fn refinement_is_deterministic() {
     assert_eq!(a.image("surface"), b.image("surface"));
 }
 
+/// `emit_beams` writes each leaf's beams with one invocation per beam, finding its leaf
+/// and family by binary search over the level's prefix sums: every slot up to the count
+/// holds a beam, none is written twice (two slots never hold the same beam), and each
+/// family's counter is the records of that family. With several families per leaf (the
+/// Fresnel reflection and two internal reflections), refined over two levels, so that
+/// levels where most candidates split sit between the ones that emit.
+#[test]
+fn every_beam_slot_holds_one_leaf_family_once() {
+    let mut c = config();
+    c.beams.bounces = 2;
+    let mut run = Run::new(builtin("sphere_on_plane", 64, 48), &c);
+    run.frame();
+    let beams = run.method.read_beams(&run.ctx).expect("beams");
+    assert_eq!(beams.len() as u64, run.counter("beams"));
+    assert!(
+        run.counter("beams_level_1") > 0 && run.counter("beams_level_2") > 0,
+        "refinement stopped early"
+    );
+    let empty = beams
+        .iter()
+        .filter(|b| bytemuck::bytes_of(*b).iter().all(|&x| x == 0))
+        .count();
+    assert_eq!(empty, 0, "slots left unwritten among the counted beams");
+    let mut records: Vec<&[u8]> = beams.iter().map(bytemuck::bytes_of).collect();
+    records.sort_unstable();
+    records.dedup();
+    assert_eq!(
+        records.len(),
+        beams.len(),
+        "a beam was written into two slots"
+    );
+    let by_family = |f: u32| beams.iter().filter(|b| b.family() == f).count() as u64;
+    for (family, counter) in [
+        (0, "beams_path_main"),
+        (1, "beams_path_fresnel_reflection"),
+        (3, "beams_path_internal_2"),
+    ] {
+        assert!(by_family(family) > 0, "no beams of family {family}");
+        assert_eq!(by_family(family), run.counter(counter), "{counter}");
+    }
+}
+
 /// Two glass balls under two suns from different sides (each light's generation its
 /// own: its own grid, refinement and vertex-cache stamp), seen at 64×48.
 fn balls_under_two_suns() -> serde_json::Value {
