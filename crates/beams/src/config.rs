@@ -44,8 +44,8 @@ method_params! {
         light_resolution: u32 = 1024 => closed(16.0, 4096.0);
         /// distance impostor resolution (texels per cube-face side)
         impostor_resolution: u32 = 256 => closed(16.0, 2048.0);
-        /// capacity of the beam and candidate buffers; excess is counted as overflow and warned about (bound: 2^22 beams are 1.1 GB)
-        max_beams: u32 = 1 << 16 => closed(1.0, 4194304.0);
+        /// capacity of the beam and candidate buffers; excess is counted as overflow and warned about (bound: 4,194,240 = 65,535 x 64, the candidates and the beams are dispatched 64 to a workgroup and a dispatch of more than 65,535 workgroups a side is dropped whole; 1.1 GB of beams)
+        max_beams: u32 = 1 << 16 => closed(1.0, 4194240.0);
         /// also trace the Fresnel-reflected beams of dielectrics
         reflections: bool = true;
         /// further specular events beyond the paper's path (two refractions, Sect. 6): internal reflections in a closed refractor (Fresnel and total; each count a beam family of its own), total internal reflection elsewhere, a generator met again (a ring's opposite wall, a concave mesh) (paper: 0; bound: one beam family and counter per internal reflection, each traced for every leaf)
@@ -123,7 +123,7 @@ method_params! {
         /// split while the beam base spans more than this many pixels where its central ray passes closest to the eye (bound: an image side)
         split_camera_px: f64 = 16.0 => above(0.0, 16384.0);
         /// beams to aim for, counted over the paper's families, the main path and the Fresnel reflection (Table 1's largest count at 1024x768; the internal reflections of `bounces` come on top, one family per leaf the budget buys): each level, coarse first, takes the splits the oracle asks for by priority (pixels of misplaced light; a triangle whose light would be dropped first) while they fit the beams left, four children per beam at stake (the paper's "convergent beams ... are refined with higher priority", Sect. 4.2); a target, not a bound (children may emit more than estimated); 0 = every split asked (bound: max_beams)
-        beam_budget: u32 = 5300 => closed(0.0, 4194304.0);
+        beam_budget: u32 = 5300 => closed(0.0, 4194240.0);
     }
 }
 
@@ -219,6 +219,25 @@ mod tests {
             .check()
             .is_ok()
         );
+    }
+
+    /// Candidates and beams are dispatched 64 to a workgroup, and wgpu drops an indirect
+    /// dispatch of more than 65,535 workgroups a side whole (a no-op, no error): the
+    /// buffers hold no more than that many.
+    #[test]
+    fn max_beams_fits_one_dispatch_of_64_wide_workgroups() {
+        let fits = BeamParams {
+            max_beams: 65_535 * 64,
+            ..BeamParams::default()
+        };
+        fits.check().expect("65,535 workgroups of 64");
+        let e = BeamParams {
+            max_beams: 65_535 * 64 + 1,
+            ..fits
+        }
+        .check()
+        .expect_err("65,536 workgroups");
+        assert!(e.contains("max_beams"), "{e}");
     }
 
     #[test]

@@ -350,7 +350,7 @@ fn requests_past_the_devices_limits_are_refused_before_allocating() {
                 "--method",
                 "static-grid",
                 "--param",
-                "max_beams=4194304",
+                "max_beams=4194240",
             ],
             None,
             vec!["max_beams", "max_storage_buffer_binding_size", "at most"],
