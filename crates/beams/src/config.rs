@@ -29,7 +29,7 @@ pub const MAX_LEVELS: u32 = 4;
 /// Most further specular events [`BeamParams::bounces`] allows: the photon-hit methods'
 /// bound, so one experiment sets every method alike. Each internal reflection is a
 /// beam family of its own (one bit of a leaf's action word, one control counter, and
-/// three more corner paths traced per leaf in `decide` and `emit`).
+/// three more corner paths traced per leaf in `decide` and `emit_beams`).
 pub const MAX_BOUNCES: u32 = 8;
 
 method_params! {

@@ -202,19 +202,19 @@ fn trace_corners(c: Candidate, family: u32) -> Corners {
 //
 // Without it the refinement traces a vertex's main path once for each triangle that has
 // it as a corner (up to six), again as the edge midpoint the oracle tests before the
-// vertex becomes its children's corner, and again where `emit` writes a leaf's beam. With
+// vertex becomes its children's corner, and again where `emit_beams` writes a leaf's beam. With
 // it every vertex of the lattice the grid refines to (grid·2^levels cells a side, where
 // every corner and oracle midpoint lies) is traced once per generation, in
 // `trace_lattice`, one invocation per vertex: one writer per entry, so what an entry
 // holds, and every beam and count after it, does not depend on the order invocations
 // run in. The vertices a level needs are marked the level before (`init_grid`: the base
 // grid's corners and, with levels to come, its edge midpoints; `emit`: the edge
-// midpoints of a split's children), and `decide` and `emit` read them (`main_path`).
+// midpoints of a split's children), and `decide` and `emit_beams` read them (`main_path`).
 // With CACHE_REFLECTED (`reflections` on a scene with a dielectric) the Fresnel
 // reflection is cached alike, in a second lattice of entries after the first: it is
 // traced for the vertices that become corners (`init_grid`: the base grid's; `emit`: a
 // split's new ones), since the leaves of a ranked refinement, and every leaf's beam in
-// `emit`, ask for it at their three corners (water_pool at 1024x768, adaptive-beams:
+// `emit_beams`, ask for it at their three corners (water_pool at 1024x768, adaptive-beams:
 // 8,116 candidates each tracing it three times in `decide`, and leaves again in `emit`,
 // against one trace per corner vertex). The internal reflections of `bounces` are
 // traced where they are asked for, as without the cache.
@@ -310,7 +310,7 @@ fn mark_midpoints(p0: vec2<f32>, p1: vec2<f32>, p2: vec2<f32>) {
 }
 
 // Whether the vertex cache is on (u.vertex_cache_side > 0): compiled in, so that
-// `decide` and `emit` hold no copy of the tracer for the main path (on lavapipe an
+// `decide` and `emit_beams` hold no copy of the tracer for the main path (on lavapipe an
 // invocation pays for every instruction of its kernel, the branches it does not take
 // too).
 override VERTEX_CACHE: bool;
@@ -320,7 +320,7 @@ override CACHE_REFLECTED: bool;
 
 // Whether a leaf may ask for a family the cache does not hold (the internal reflections
 // of `bounces`; the Fresnel reflection of a dielectric where it is not cached): only
-// then do `decide` and `emit` hold a copy of the path tracer, which on lavapipe costs
+// then do `decide` and `emit_beams` hold a copy of the path tracer, which on lavapipe costs
 // its kernel's every invocation whether it runs or not.
 override FAMILY_TRACER: bool;
 
@@ -1389,7 +1389,7 @@ fn write_orphan(slot: u32, c: Candidate, k: Corners) {
 }
 
 // vertex_irradiance (the smooth interpolation of Ernst et al. 2005 that Sect. 7 names
-// beside its one area function per beam): `emit` lists each beam at its corners'
+// beside its one area function per beam): `emit_beams` lists each beam at its corners'
 // lattice vertices (`write_beam`), and after the last level `vertex_irradiance` gives
 // each corner the irradiance where the light lands around its vertex: the flux of the
 // beams of its family listed there over their landing area (ΔΦ/ΔA, each beam's A at
@@ -1432,7 +1432,7 @@ fn vertex_irradiance(@builtin(global_invocation_id) id: vec3<u32>) {
         let r = vertex_list(bitcast<u32>(beams[slot].hull[i].w), family);
         let n = min(atomicLoad(&control[r]), VERTEX_LIST_SLOTS);
         // The listed beams in slot order, so that the sums, and the image, are the
-        // same on every run whatever order `emit` listed them in.
+        // same on every run whatever order `emit_beams` listed them in.
         var listed: array<u32, VERTEX_LIST_SLOTS>;
         for (var j = 0u; j < n; j++) {
             let s = atomicLoad(&control[r + 1u + j]);
