@@ -93,14 +93,23 @@ fn shade_beam(b: Beam, pixel: vec2<u32>, r: vec3<f32>) -> BeamOut {
         var a_edge: array<f32, 3>;
         var c_edge: array<f32, 3>;
         var ok = true;
+        // The edges picked by select() rather than b.d[i]: a Beam value indexed by a
+        // variable is written into a temporary to be indexed (generate.wgsl `size_px`).
+        let v0 = b.v[0].xyz;
+        let v1 = b.v[1].xyz;
+        let v2 = b.v[2].xyz;
+        let d0 = b.d[0].xyz;
+        let d1 = b.d[1].xyz;
+        let d2 = b.d[2].xyz;
         for (var i = 0u; i < 3u; i++) {
-            let di = b.d[i].xyz;
+            let di = select(select(d2, d1, i == 1u), d0, i == 0u);
+            let vi = select(select(v2, v1, i == 1u), v0, i == 0u);
             let den = dot(di, np);
             if abs(den) < 1e-12 {
                 ok = false;
             }
-            let s = dot(eye - b.v[i].xyz, np) / select(den, 1.0, abs(den) < 1e-12);
-            let p = b.v[i].xyz + s * di;
+            let s = dot(eye - vi, np) / select(den, 1.0, abs(den) < 1e-12);
+            let p = vi + s * di;
             a_edge[i] = dot(p - eye, r);
             c_edge[i] = dot(p - eye, q);
         }

@@ -181,7 +181,7 @@ struct Corners {
 
 fn trace_corners(c: Candidate, family: u32) -> Corners {
     var k: Corners;
-    let uv = array<vec2<f32>, 3>(c.uv01.xy, c.uv01.zw, c.uv2_level.xy);
+    var uv = array<vec2<f32>, 3>(c.uv01.xy, c.uv01.zw, c.uv2_level.xy);
     for (var i = 0u; i < 3u; i++) {
         if family == FAMILY_MAIN {
             k.p[i] = main_path(uv[i]);
@@ -441,7 +441,8 @@ fn lands(k: Corners) -> bool {
 
 // Some corner's path is valid and reaches a receiver: a family that emits no beam
 // still has light there (splat_orphans draws it as points).
-fn any_landed(k: Corners) -> bool {
+fn any_landed(corners: Corners) -> bool {
+    var k = corners;
     var landed = false;
     for (var i = 0u; i < 3u; i++) {
         landed = landed || (k.p[i].valid && k.p[i].end_object != NONE);
@@ -466,7 +467,8 @@ struct Leaf {
 }
 
 // The landed corners' weight over the light's, a third each (write_orphan's shares).
-fn landed_share(k: Corners) -> f32 {
+fn landed_share(corners: Corners) -> f32 {
+    var k = corners;
     var w = 0.0;
     for (var i = 0u; i < 3u; i++) {
         if k.p[i].valid && k.p[i].end_object != NONE {
@@ -477,7 +479,8 @@ fn landed_share(k: Corners) -> f32 {
 }
 
 // Whether some corner's path meets a dielectric first (`closed`: a closed one).
-fn some_first_dielectric(k: Corners, closed: bool) -> bool {
+fn some_first_dielectric(corners: Corners, closed: bool) -> bool {
+    var k = corners;
     var found = false;
     for (var i = 0u; i < 3u; i++) {
         let slot = k.p[i].first_slot;
@@ -576,37 +579,55 @@ fn count_drop(reason: u32, no_receiver: u32) {
 // discontinuity: the spread of its valid corners' landings (their points on the
 // generator where fewer than two land), or half its parent's where fewer than two
 // corners are valid.
+//
+// Written with fixed indices, as are the oracle's other corner tests: SPIR-V cannot
+// index an array value by a variable, so naga writes the value (here the three corners'
+// paths) into a temporary to index it (k.p[i], or a list filled up to a count), and on
+// lavapipe those copies cost far more than the arithmetic. Written as loops, the split
+// oracle took 17-22 ms of water_pool's level-2 `decide` at 1024x768 (about 4,000
+// candidates) against 0.5 ms to read the corners; with fixed indices 1.2 ms. Values
+// that must be indexed by a variable are copied into a `var` once (`Hull`).
 fn size_px(c: Candidate, k: Corners) -> f32 {
-    var pts: array<vec3<f32>, 3>;
-    var n = 0u;
-    for (var i = 0u; i < 3u; i++) {
-        if k.p[i].valid && k.p[i].end_object != NONE {
-            pts[n] = k.p[i].origin + k.p[i].dir * k.p[i].t_end;
-            n += 1u;
-        }
+    let p0 = k.p[0];
+    let p1 = k.p[1];
+    let p2 = k.p[2];
+    var use_p = vec3<bool>(p0.valid && p0.end_object != NONE, p1.valid && p1.end_object != NONE,
+                           p2.valid && p2.end_object != NONE);
+    var q0 = p0.origin + p0.dir * p0.t_end;
+    var q1 = p1.origin + p1.dir * p1.t_end;
+    var q2 = p2.origin + p2.dir * p2.t_end;
+    if u32(use_p.x) + u32(use_p.y) + u32(use_p.z) < 2u {
+        use_p = vec3<bool>(p0.valid, p1.valid, p2.valid);
+        q0 = p0.first_point;
+        q1 = p1.first_point;
+        q2 = p2.first_point;
     }
-    if n < 2u {
-        n = 0u;
-        for (var i = 0u; i < 3u; i++) {
-            if k.p[i].valid {
-                pts[n] = k.p[i].first_point;
-                n += 1u;
-            }
-        }
-    }
+    let n = u32(use_p.x) + u32(use_p.y) + u32(use_p.z);
     if n < 2u {
         return 0.5 * c.uv2_level.w;
     }
+    // The points in corner order, the pairs (0, 1), (0, 2), (1, 2) among them.
     var center = vec3<f32>(0.0);
+    if use_p.x { center += q0; }
+    if use_p.y { center += q1; }
+    if use_p.z { center += q2; }
     var spread = 0.0;
-    for (var i = 0u; i < n; i++) {
-        center += pts[i];
-        for (var j = i + 1u; j < n; j++) {
-            spread = max(spread, distance(pts[i], pts[j]));
-        }
-    }
+    if use_p.x && use_p.y { spread = max(spread, distance(q0, q1)); }
+    if use_p.x && use_p.z { spread = max(spread, distance(q0, q2)); }
+    if use_p.y && use_p.z { spread = max(spread, distance(q1, q2)); }
     center /= f32(n);
     return spread / (max(distance(center, frame.eye.xyz), 1e-6) * u.pixel_angle);
+}
+
+// Whether corners a and b meet their first surface far apart in orientation (normals
+// beyond split_cos_normal) or in depth (more than split_depth_slope times their lateral
+// distance): a crease or an occluding edge between them.
+fn first_surfaces_part(a: PathEnd, b: PathEnd) -> bool {
+    let delta = a.first_point - b.first_point;
+    let along = dot(delta, a.light_dir);
+    let lateral = length(delta - along * a.light_dir);
+    return dot(a.first_normal, b.first_normal) < u.split_cos_normal
+        || abs(a.first_depth - b.first_depth) > u.split_depth_slope * max(lateral, 1e-9);
 }
 
 // The split oracle (Sect. 4.2): which criteria ask for a split and, with a beam
@@ -641,7 +662,7 @@ fn irradiance_error_px(k: Corners, mids: array<vec3<f32>, 3>) -> f32 {
     let normal = n / area2;
     // The children: one at each corner (corner, next edge's midpoint, previous edge's
     // midpoint; mids[i] lies on edge i -> i + 1) and the middle one.
-    let tris = array<vec3<f32>, 12>(
+    var tris = array<vec3<f32>, 12>(
         l0, mids[0], mids[2],
         mids[0], l1, mids[1],
         mids[2], mids[1], l2,
@@ -677,20 +698,9 @@ fn split_oracle(c: Candidate, k: Corners, level: u32) -> Split {
             // silhouette; split so the leaves follow it.
             s.reasons |= SPLIT_DISCONTINUITY;
         } else if valid == 3u {
-            if !consistent(k) {
+            if !consistent(k) || first_surfaces_part(k.p[0], k.p[1])
+                || first_surfaces_part(k.p[1], k.p[2]) || first_surfaces_part(k.p[2], k.p[0]) {
                 s.reasons |= SPLIT_DISCONTINUITY;
-            }
-            for (var i = 0u; i < 3u; i++) {
-                let j = (i + 1u) % 3u;
-                if dot(k.p[i].first_normal, k.p[j].first_normal) < u.split_cos_normal {
-                    s.reasons |= SPLIT_DISCONTINUITY;
-                }
-                let delta = k.p[i].first_point - k.p[j].first_point;
-                let along = dot(delta, k.p[i].light_dir);
-                let lateral = length(delta - along * k.p[i].light_dir);
-                if abs(k.p[i].first_depth - k.p[j].first_depth) > u.split_depth_slope * max(lateral, 1e-9) {
-                    s.reasons |= SPLIT_DISCONTINUITY;
-                }
             }
         }
         if s.reasons != 0u {
@@ -720,13 +730,29 @@ fn split_oracle(c: Candidate, k: Corners, level: u32) -> Split {
     // caustic (below).
     var misplaced_px = 0.0;
     if (hits || irradiance) && s.reasons == 0u {
-        let uv = array<vec2<f32>, 3>(c.uv01.xy, c.uv01.zw, c.uv2_level.xy);
-        var mids: array<vec3<f32>, 3>;
+        // Corner i's uv, landing, signature and receiver, picked by select() rather
+        // than k.p[i] (see size_px); one call of main_path (without the cache, the
+        // tracer), and no midpoint past the first that disagrees.
+        let uv0 = c.uv01.xy;
+        let uv1 = c.uv01.zw;
+        let uv2 = c.uv2_level.xy;
+        let land0 = k.p[0].origin + k.p[0].dir * k.p[0].t_end;
+        let land1 = k.p[1].origin + k.p[1].dir * k.p[1].t_end;
+        let land2 = k.p[2].origin + k.p[2].dir * k.p[2].t_end;
+        let signatures = vec3<u32>(k.p[0].signature, k.p[1].signature, k.p[2].signature);
+        let ends = vec3<u32>(k.p[0].end_object, k.p[1].end_object, k.p[2].end_object);
+        var mid0 = vec3<f32>(0.0);
+        var mid1 = vec3<f32>(0.0);
+        var mid2 = vec3<f32>(0.0);
         var paths_agree = true;
         for (var i = 0u; i < 3u; i++) {
-            let j = (i + 1u) % 3u;
-            let m = main_path(0.5 * (uv[i] + uv[j]));
-            if !m.valid || m.signature != k.p[i].signature || m.end_object != k.p[i].end_object {
+            // Edge i runs from corner i to corner i + 1.
+            let uv_i = select(select(uv2, uv1, i == 1u), uv0, i == 0u);
+            let uv_j = select(select(uv0, uv2, i == 1u), uv1, i == 0u);
+            let land_i = select(select(land2, land1, i == 1u), land0, i == 0u);
+            let land_j = select(select(land0, land2, i == 1u), land1, i == 0u);
+            let m = main_path(0.5 * (uv_i + uv_j));
+            if !m.valid || m.signature != signatures[i] || m.end_object != ends[i] {
                 paths_agree = false;
                 if hits {
                     s.reasons |= SPLIT_DISCONTINUITY;
@@ -734,10 +760,14 @@ fn split_oracle(c: Candidate, k: Corners, level: u32) -> Split {
                 }
                 break;
             }
-            let land_i = k.p[i].origin + k.p[i].dir * k.p[i].t_end;
-            let land_j = k.p[j].origin + k.p[j].dir * k.p[j].t_end;
             let land_m = m.origin + m.dir * m.t_end;
-            mids[i] = land_m;
+            if i == 0u {
+                mid0 = land_m;
+            } else if i == 1u {
+                mid1 = land_m;
+            } else {
+                mid2 = land_m;
+            }
             let deviation = distance(land_m, 0.5 * (land_i + land_j));
             let dist = max(distance(land_m, frame.eye.xyz), 1e-6);
             let edge = distance(land_i, land_j);
@@ -749,6 +779,7 @@ fn split_oracle(c: Candidate, k: Corners, level: u32) -> Split {
                 }
             }
         }
+        let mids = array<vec3<f32>, 3>(mid0, mid1, mid2);
         // Unranked, a deviation ended the loop early (mids incomplete) and the split
         // is asked already.
         if paths_agree && irradiance && (ranked || s.reasons == 0u) && k.p[0].end_object != NONE {
@@ -1050,7 +1081,9 @@ fn plane_side(p: vec3<f32>, origin: vec3<f32>, m: vec3<f32>) -> f32 {
 // Ernst et al.'s touching plane through base edge (a, b): the plane through the edge
 // and one top vertex that leaves every top vertex on the inner side (vertex c's side).
 // Returns the outward unit normal (xyz) and offset (w).
-fn prism_plane(va: vec3<f32>, vb: vec3<f32>, vc: vec3<f32>, top: array<vec3<f32>, 3>, n: vec3<f32>, eps: f32) -> vec4<f32> {
+fn prism_plane(va: vec3<f32>, vb: vec3<f32>, vc: vec3<f32>, top_value: array<vec3<f32>, 3>, n: vec3<f32>, eps: f32) -> vec4<f32> {
+    // Indexed by loop counters: a variable (see `Hull`).
+    var top = top_value;
     for (var k = 0u; k < 3u; k++) {
         var m = cross(vb - va, top[k] - va);
         let len = length(m);
@@ -1089,11 +1122,12 @@ fn three_planes(p1: vec4<f32>, p2: vec4<f32>, p3: vec4<f32>, fallback: vec3<f32>
 
 // The one vertex of `others` whose plane with edge (a, b) has all six hull points on
 // one side; NONE if there is none or more than one (then the paper reverts to prisms).
-fn tight_vertex(pts: array<vec3<f32>, 6>, a: u32, b: u32, first_other: u32, eps: f32) -> u32 {
+fn tight_vertex(h: ptr<function, Hull>, a: u32, b: u32, first_other: u32, eps: f32) -> u32 {
+    let pts = &(*h).pts;
     var found = NONE;
     var count = 0u;
     for (var k = first_other; k < first_other + 3u; k++) {
-        let m0 = cross(pts[b] - pts[a], pts[k] - pts[a]);
+        let m0 = cross((*pts)[b] - (*pts)[a], (*pts)[k] - (*pts)[a]);
         let len = length(m0);
         if len < 1e-12 {
             continue;
@@ -1102,7 +1136,7 @@ fn tight_vertex(pts: array<vec3<f32>, 6>, a: u32, b: u32, first_other: u32, eps:
         var pos = false;
         var neg = false;
         for (var j = 0u; j < 6u; j++) {
-            let s = plane_side(pts[j], pts[a], m);
+            let s = plane_side((*pts)[j], (*pts)[a], m);
             pos = pos || s > eps;
             neg = neg || s < -eps;
         }
@@ -1114,6 +1148,10 @@ fn tight_vertex(pts: array<vec3<f32>, 6>, a: u32, b: u32, first_other: u32, eps:
     return select(NONE, found, count == 1u);
 }
 
+// The hull's points and triangles are read by loop counters and computed indices, so
+// the functions below take it by pointer and copy array arguments into variables once:
+// an array value indexed by a variable is written into a temporary to be indexed (see
+// `size_px`).
 struct Hull {
     pts: array<vec3<f32>, 6>,
     tri: array<vec3<u32>, 8>,
@@ -1135,7 +1173,9 @@ fn orient_outward(h: ptr<function, Hull>) {
     }
 }
 
-fn build_hull(v: array<vec3<f32>, 3>, top: array<vec3<f32>, 3>, n: vec3<f32>, y_max: f32) -> Hull {
+fn build_hull(v_value: array<vec3<f32>, 3>, top_value: array<vec3<f32>, 3>, n: vec3<f32>, y_max: f32) -> Hull {
+    var v = v_value;
+    var top = top_value;
     var h: Hull;
     let size = max(max(distance(v[0], v[1]), distance(v[1], v[2])), distance(v[2], v[0]))
         + max(max(distance(top[0], top[1]), distance(top[1], top[2])), distance(top[2], top[0]));
@@ -1157,8 +1197,8 @@ fn build_hull(v: array<vec3<f32>, 3>, top: array<vec3<f32>, 3>, n: vec3<f32>, y_
         for (var e = 0u; e < 3u; e++) {
             let a = e;
             let b = (e + 1u) % 3u;
-            let k_top = tight_vertex(h.pts, a, b, 3u, eps);
-            let k_base = tight_vertex(h.pts, a + 3u, b + 3u, 0u, eps);
+            let k_top = tight_vertex(&h, a, b, 3u, eps);
+            let k_base = tight_vertex(&h, a + 3u, b + 3u, 0u, eps);
             ok = ok && k_top != NONE && k_base != NONE;
             h.tri[2u + e] = vec3<u32>(a, b, select(3u, k_top, k_top != NONE));
             h.tri[5u + e] = vec3<u32>(a + 3u, b + 3u, select(0u, k_base, k_base != NONE));
@@ -1188,19 +1228,21 @@ fn build_hull(v: array<vec3<f32>, 3>, top: array<vec3<f32>, 3>, n: vec3<f32>, y_
     return h;
 }
 
-fn pack_tris(h: Hull) -> vec4<u32> {
+fn pack_tris(h: ptr<function, Hull>) -> vec4<u32> {
     var words = vec4<u32>(0u, 0u, 0u, select(0u, 1u, h.tight));
     for (var t = 0u; t < 8u; t++) {
         for (var c = 0u; c < 3u; c++) {
             let i = t * 3u + c;
-            words[i / 8u] |= h.tri[t][c] << (4u * (i % 8u));
+            words[i / 8u] |= (*h).tri[t][c] << (4u * (i % 8u));
         }
     }
     return words;
 }
 
-fn write_beam(slot: u32, c: Candidate, k: Corners, family: u32) {
-    let g = corners_geometry(k);
+fn write_beam(slot: u32, c: Candidate, k_value: Corners, family: u32) {
+    // Indexed by the loop counter below: variables (see `Hull`).
+    var k = k_value;
+    var g = corners_geometry(k);
     var b: Beam;
     let ends = end_heights(k, g);
     let y_max = max(max(ends.x, ends.y), ends.z);
@@ -1220,16 +1262,16 @@ fn write_beam(slot: u32, c: Candidate, k: Corners, family: u32) {
     b.flux[1].w = f32(rehits);
     b.flux[2].w = f32(tir);
     b.n = vec4<f32>(g.n, y_max);
-    let h = build_hull(v, top, g.n, y_max);
+    var h = build_hull(v, top, g.n, y_max);
     for (var i = 0u; i < 6u; i++) {
         b.hull[i] = vec4<f32>(h.pts[i], 1.0);
     }
-    b.tris = pack_tris(h);
+    b.tris = pack_tris(&h);
     if VERTEX_IRRADIANCE {
         // The beam is listed at its corners' lattice vertices, and the corners'
         // entries wait in the hull's unused w for `vertex_irradiance`, which replaces
         // them with the corners' irradiance factors.
-        let uv = array<vec2<f32>, 3>(c.uv01.xy, c.uv01.zw, c.uv2_level.xy);
+        var uv = array<vec2<f32>, 3>(c.uv01.xy, c.uv01.zw, c.uv2_level.xy);
         for (var i = 0u; i < 3u; i++) {
             let entry = lattice_entry(uv[i]);
             b.hull[i].w = bitcast<f32>(entry);
@@ -1369,7 +1411,8 @@ fn emit_orphans(@builtin(global_invocation_id) id: vec3<u32>) {
 // The corners of a family the leaf emits no beam for: each landed corner keeps a third
 // of the triangle's flux (the vertex rule of quadrature over it), so the light a
 // silhouette or a fold tears off the beams still reaches the receiver, as points.
-fn write_orphan(slot: u32, c: Candidate, k: Corners) {
+fn write_orphan(slot: u32, c: Candidate, corners: Corners) {
+    var k = corners;
     let share = source_measure(c.uv01.xy, c.uv01.zw, c.uv2_level.xy) / 3.0;
     var o: Orphan;
     o.receiver = vec4<u32>(NONE);

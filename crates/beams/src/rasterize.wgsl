@@ -15,9 +15,10 @@ struct VsOut {
 fn vs_beam(@builtin(vertex_index) vi: u32) -> VsOut {
     let beam = vi / 24u;
     let corner = vi % 24u;
-    let b = beams[beam];
-    let index = (b.tris[corner / 8u] >> (4u * (corner % 8u))) & 15u;
-    let p = b.hull[index].xyz;
+    // Read through the buffer: a Beam value indexed by a variable is written into a
+    // temporary to be indexed (generate.wgsl `size_px`).
+    let index = (beams[beam].tris[corner / 8u] >> (4u * (corner % 8u))) & 15u;
+    let p = beams[beam].hull[index].xyz;
     var o: VsOut;
     o.clip = frame.view_proj * vec4<f32>(p, 1.0);
     o.world = p;

@@ -82,7 +82,9 @@ fn rasterize(
         atomicStore(&edge_count, 0u);
     }
     if lane < 6u {
-        clip[lane] = frame.view_proj * vec4<f32>(b.hull[lane].xyz, 1.0);
+        // Through the buffer: `b` indexed by a variable would be written into a
+        // temporary first (generate.wgsl `size_px`).
+        clip[lane] = frame.view_proj * vec4<f32>(beams[beam].hull[lane].xyz, 1.0);
     }
     workgroupBarrier();
     // Clipped at the camera plane as the rasterizer clips the hull's triangles (at the
