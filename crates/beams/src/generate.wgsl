@@ -1239,23 +1239,19 @@ fn pack_tris(h: ptr<function, Hull>) -> vec4<u32> {
     return words;
 }
 
-fn write_beam(slot: u32, c: Candidate, k_value: Corners, family: u32) {
-    // Indexed by the loop counter below: variables (see `Hull`).
-    var k = k_value;
-    var g = corners_geometry(k);
+fn write_beam(slot: u32, c: Candidate, k: Corners, family: u32) {
+    let g = corners_geometry(k);
     var b: Beam;
     let ends = end_heights(k, g);
     let y_max = max(max(ends.x, ends.y), ends.z);
     let measure = source_measure(c.uv01.xy, c.uv01.zw, c.uv2_level.xy);
-    var v: array<vec3<f32>, 3>;
-    var top: array<vec3<f32>, 3>;
-    for (var i = 0u; i < 3u; i++) {
-        v[i] = k.p[i].origin;
-        top[i] = v[i] + y_max * g.d[i];
-        b.v[i] = vec4<f32>(v[i], g.a[i]);
-        b.d[i] = vec4<f32>(g.d[i], ends[i]);
-        b.flux[i] = vec4<f32>(k.p[i].weight * measure, 0.0);
-    }
+    // Fixed indices (see size_px).
+    let v = array<vec3<f32>, 3>(k.p[0].origin, k.p[1].origin, k.p[2].origin);
+    let top = array<vec3<f32>, 3>(v[0] + y_max * g.d[0], v[1] + y_max * g.d[1], v[2] + y_max * g.d[2]);
+    b.v = array<vec4<f32>, 3>(vec4<f32>(v[0], g.a.x), vec4<f32>(v[1], g.a.y), vec4<f32>(v[2], g.a.z));
+    b.d = array<vec4<f32>, 3>(vec4<f32>(g.d[0], ends.x), vec4<f32>(g.d[1], ends.y), vec4<f32>(g.d[2], ends.z));
+    b.flux = array<vec4<f32>, 3>(vec4<f32>(k.p[0].weight * measure, 0.0), vec4<f32>(k.p[1].weight * measure, 0.0),
+                                 vec4<f32>(k.p[2].weight * measure, 0.0));
     let rehits = k.p[0].rehits + k.p[1].rehits + k.p[2].rehits;
     let tir = k.p[0].tir + k.p[1].tir + k.p[2].tir;
     b.flux[0].w = f32(family);
@@ -1263,9 +1259,8 @@ fn write_beam(slot: u32, c: Candidate, k_value: Corners, family: u32) {
     b.flux[2].w = f32(tir);
     b.n = vec4<f32>(g.n, y_max);
     var h = build_hull(v, top, g.n, y_max);
-    for (var i = 0u; i < 6u; i++) {
-        b.hull[i] = vec4<f32>(h.pts[i], 1.0);
-    }
+    b.hull = array<vec4<f32>, 6>(vec4<f32>(h.pts[0], 1.0), vec4<f32>(h.pts[1], 1.0), vec4<f32>(h.pts[2], 1.0),
+                                 vec4<f32>(h.pts[3], 1.0), vec4<f32>(h.pts[4], 1.0), vec4<f32>(h.pts[5], 1.0));
     b.tris = pack_tris(&h);
     if VERTEX_IRRADIANCE {
         // The beam is listed at its corners' lattice vertices, and the corners'
