@@ -158,11 +158,18 @@ fn init_grid(@builtin(global_invocation_id) id: vec3<u32>) {
     candidates_a[id.x] = t;
 }
 
+// Whether the scene has a positional light (set by lib.rs): only then is the spherical
+// triangle's solid angle below compiled in. On lavapipe its code cost a dispatch of
+// `emit_beams` about 6 ms whether any invocation ran it or not (water_pool, a
+// directional light, at 1024x768: 2.9 ms without it, 8-10 ms with it; one invocation
+// per beam, 4,789 beams), and `emit` 2 ms a level where it was tried there.
+override POSITIONAL_LIGHTS: bool;
+
 // Flux of a beam whose rays all carried weight 1: the source measure of its uv
 // triangle (m² perpendicular to a directional light; sr for a positional light, the
 // exact solid angle of the spherical triangle, Van Oosterom & Strackee 1983).
 fn source_measure(uv0: vec2<f32>, uv1: vec2<f32>, uv2: vec2<f32>) -> f32 {
-    if u.light_dir_kind.w < 0.5 {
+    if !POSITIONAL_LIGHTS || u.light_dir_kind.w < 0.5 {
         let e1 = uv1 - uv0;
         let e2 = uv2 - uv0;
         return 0.5 * abs(e1.x * e2.y - e1.y * e2.x) * u.light_power.w;

@@ -133,7 +133,7 @@ use caustics_gpu::wgpu::{self, util::DeviceExt};
 use caustics_gpu::{Frame, GBuffer, GpuContext, GpuError, LightView, Renderer, shader};
 use caustics_method::params::Raster;
 use caustics_method::{Capabilities, CausticsMethod, Counters, MethodError, Unsupported};
-use caustics_scene::{Scene, Vec3};
+use caustics_scene::{Light, Scene, Vec3};
 
 pub use config::{BeamConfig, BeamParams, HullKind, MAX_BOUNCES, MAX_LEVELS, Refinement, Tracer};
 pub use control::COUNTER_DOCS;
@@ -1003,6 +1003,15 @@ impl BeamMethod {
                 ("VERTEX_CACHE", f64::from(u8::from(vertex_cache_side > 0))),
                 ("CACHE_REFLECTED", f64::from(u8::from(cache_reflected))),
                 ("FAMILY_TRACER", f64::from(u8::from(family_tracer))),
+                (
+                    "POSITIONAL_LIGHTS",
+                    f64::from(u8::from(
+                        scene
+                            .lights
+                            .iter()
+                            .any(|light| !matches!(light, Light::Directional { .. })),
+                    )),
+                ),
                 (
                     "VERTEX_IRRADIANCE",
                     f64::from(u8::from(vertex_list_words > 0)),
