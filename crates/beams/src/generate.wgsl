@@ -591,9 +591,9 @@ fn count_drop(reason: u32, no_receiver: u32) {
 // index an array value by a variable, so naga writes the value (here the three corners'
 // paths) into a temporary to index it (k.p[i], or a list filled up to a count), and on
 // lavapipe those copies cost far more than the arithmetic. Written as loops, the split
-// oracle took 17-22 ms of water_pool's level-2 `decide` at 1024x768 (about 4,000
-// candidates) against 0.5 ms to read the corners; with fixed indices 1.2 ms. Values
-// that must be indexed by a variable are copied into a `var` once (`Hull`).
+// oracle took 17-22 ms of water_pool's level-2 `decide` at 1024x768 against 0.4-0.5 ms
+// to read the corners; with fixed indices 1.2 ms. Values that must be indexed by a
+// variable are copied into a `var` once (`Hull`).
 fn size_px(c: Candidate, k: Corners) -> f32 {
     let p0 = k.p[0];
     let p1 = k.p[1];
