@@ -1348,8 +1348,8 @@ fn emit(@builtin(global_invocation_id) id: vec3<u32>) {
     // into the record after the last level by `emit_beams` and `emit_orphans`, one
     // invocation each. Tracing here would make every candidate of the level pay for
     // the tracer where most of them split (a GPU's wave waits for its slowest lane;
-    // lavapipe pays again for every dispatch of a kernel holding the tracer and the
-    // hull, empty or not: 7-10 ms at water_pool's 1024x768, once per level).
+    // on lavapipe every invocation of a kernel pays for the code it holds, taken or
+    // not: see POSITIONAL_LIGHTS).
     var slot = atomicLoad(&control[C_BEAM_BASE]) + off.y;
     var orphan_slot = atomicLoad(&control[C_ORPHAN_BASE]) + off.w;
     for (var family = 0u; family < FAMILY_INTERNAL + u.bounces; family++) {
