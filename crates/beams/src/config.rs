@@ -54,6 +54,8 @@ method_params! {
         tracer: Tracer = Tracer::Impostor;
         /// also splat the light of the families a leaf drops (its corners part ways: a silhouette, different paths or receivers): each landed corner as a one-pixel point of a third of the triangle's flux, on the surface caustic (paper: false, that light is lost; bound: max_beams point records)
         splat_orphans: bool = false;
+        /// emit the light of the families a leaf drops (its corners part ways) as clipped beams: each group of corners on one path keeps the part of the triangle around it, bounded on the edges to the other corners by the last point of its path that 6 bisections find (2 beams for a pair of corners, 1 for a corner alone; a leaf whose corners agree but whose exit points admit no beam space is one), and a clipped beam with no beam space at its exit points starts where its rays cross the plane across their mean direction, so silhouettes and folds keep their light in beams rather than losing it (paper: false, Sect. 4.1 omits triangles crossing silhouettes; bound: up to 3 beams per leaf and family, each clipped edge traced 6 more times; not with splat_orphans, which draws that light as points)
+        clip_leaves: bool = false;
         /// with splat_orphans: sigma (camera pixels) of a Gaussian each orphan point is spread over instead of one pixel, before the surface filter (truncated at 2 sigma, normalised over the pixels it covers, so a flat receiver keeps its flux); 0 = one-pixel points (paper: no orphans; bound: a 33 x 33 pixel quad per point)
         orphan_kernel_px: f64 = 0.0 => closed(0.0, 8.0);
         /// how the hulls reach the image: hardware (rasterized, additively blended: the paper's) or compute (the workgroups of a beam shade the pixels of its clipped hull's projected polygon with the same per-pixel function and add the light into a fixed-point accumulator with integer atomics, then a full-screen pass resolves it: the same image on every run; bound: 48 bytes of accumulator per camera pixel)
@@ -79,6 +81,9 @@ method_params! {
 /// needs the points.
 fn beam_params_agree(p: &BeamParams) -> Result<(), String> {
     caustics_method::params::orphan_kernel_needs_orphans(p.orphan_kernel_px, p.splat_orphans)?;
+    if p.clip_leaves && p.splat_orphans {
+        return Err("clip_leaves: the light of torn leaves is either clipped into beams or drawn as points (splat_orphans), not both; set one of them to false".into());
+    }
     let base = 2 * u64::from(p.grid).pow(2);
     if u64::from(p.max_beams) < base {
         return Err(format!(
@@ -238,6 +243,33 @@ mod tests {
         .check()
         .expect_err("65,536 workgroups");
         assert!(e.contains("max_beams"), "{e}");
+    }
+
+    #[test]
+    fn torn_light_is_clipped_or_splatted_not_both() {
+        let p = BeamParams {
+            clip_leaves: true,
+            splat_orphans: true,
+            ..BeamParams::default()
+        };
+        let e = p.check().expect_err("the same light twice");
+        assert!(
+            e.contains("clip_leaves") && e.contains("splat_orphans"),
+            "{e}"
+        );
+        assert!(BeamParams::default().check().is_ok());
+        assert!(
+            !BeamParams::default().clip_leaves,
+            "the paper omits torn triangles"
+        );
+        assert!(
+            BeamParams {
+                splat_orphans: false,
+                ..p
+            }
+            .check()
+            .is_ok()
+        );
     }
 
     #[test]

@@ -94,7 +94,7 @@ const SPLIT_HISTOGRAM: Word = Word {
     )
 };
 
-/// Every word, by index (words 0 to 7 and 54 to 63 are unused).
+/// Every word, by index (words 0 to 7 and 59 to 63 are unused).
 #[rustfmt::skip]
 pub(crate) const CONTROL: &[Word] = &[
     LEVEL,
@@ -130,6 +130,11 @@ pub(crate) const CONTROL: &[Word] = &[
     state("C_LATTICE_LISTED", 51, "vertices gather_lattice listed for the vertex cache to trace (this level)"),
     state("C_LATTICE_TRACE", 52, "vertices trace_lattice traces (this level)"),
     counter("C_SPLIT_IRRADIANCE", 53, "splits_irradiance", "splits asked because the children spread the light unevenly"),
+    counter("C_BEAMS_CLIPPED", 54, "beams_clipped", "clipped beams of leaves whose corners part ways (clip_leaves)"),
+    counter("C_BEAMS_CLIPPED_EMPTY", 55, "beams_clipped_empty", "clipped beams too thin for a beam space, written empty (clip_leaves)"),
+    counter("C_BEAMS_REBASED", 56, "beams_clipped_rebased", "clipped beams that start on the plane across their mean direction (clip_leaves)"),
+    counter("C_BEAMS_LANDING", 58, "beams_clipped_landing", "clipped beams drawn as their landing triangle (clip_leaves)"),
+    state("C_BEAMS_CLIPPED_BUDGET", 57, "clipped beams of the main path and the Fresnel reflection, which the budget does not count (clip_leaves)"),
     SPLIT_HISTOGRAM,
 ];
 
@@ -149,6 +154,10 @@ pub const COUNTER_DOCS: &[CounterDoc] = &[
     CounterDoc { name: "beams_path_internal_N", doc: "beams written of the light reflected N times inside the first object, a closed refractor, before it leaves (bounces >= N; one counter per N up to bounces)" },
     CounterDoc { name: "beams_path_rehit", doc: "beams written (any family) at least one of whose corner paths met the generator it had just left again and went on (a ring's opposite wall, a concave mesh; only with bounces > 0)" },
     CounterDoc { name: "beams_path_tir", doc: "beams written (any family) at least one of whose corner paths took a total internal reflection and went on (only with bounces > 0)" },
+    CounterDoc { name: "beams_clipped", doc: "with clip_leaves: beams written from leaves whose corners part ways for a family (a silhouette, different paths or receivers), each the part of the leaf around a group of corners on one path, bounded by bisected points on its edges (2 for a pair of corners, 1 for a corner alone; 1, the whole leaf, where its corners agree but their exit points admit no beam space); counted in beams, beams_level_N and beams_path_*; without clip_leaves that light is lost" },
+    CounterDoc { name: "beams_clipped_landing", doc: "with clip_leaves: clipped beams whose rays admit no beam space even rebased (they spread over more than a half-space or cross before the plane), drawn as the landing triangle of their corners instead: the corners lifted off their landing points against the rays' mean direction and sent back down along it (counted in beams_clipped)" },
+    CounterDoc { name: "beams_clipped_rebased", doc: "with clip_leaves: clipped beams whose corners' exit points admit no beam space (a direction along or across their base plane), started instead where their rays cross the plane across their mean direction through the corner furthest along it (counted in beams_clipped)" },
+    CounterDoc { name: "beams_clipped_empty", doc: "with clip_leaves: clipped beams whose corners admit no beam space (on a line, or an edge direction in the base plane), written with no light and a hull that covers no pixel (counted in beams_clipped and hulls_prism)" },
     CounterDoc { name: "candidates", doc: "grid triangles the split oracle looked at over all levels: the 2 x grid^2 base triangles plus the children of every split that fit in the candidate list" },
     CounterDoc { name: "dropped_discontinuity", doc: "leaves (triangles not split) that emit no beam because their three corners' main light paths differ: some corners miss the generators (a silhouette), or they meet different objects or event sequences, or land on different receivers" },
     CounterDoc { name: "dropped_invalid", doc: "leaves that emit no beam because none of their three corners' main light paths is valid (the light misses every generator, is totally internally reflected, or finds no exit)" },

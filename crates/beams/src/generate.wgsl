@@ -471,6 +471,9 @@ struct Leaf {
     // relative to the light's (a third of each landed corner's weight, summed over
     // them): what a split would keep in beams.
     orphan_share: f32,
+    // With CLIP_LEAVES: how many clipped beams each family that parts ways emits
+    // instead (CLIP_BITS per family f at bit CLIP_BITS·f: `clip_count`).
+    clips: u32,
 }
 
 // The landed corners' weight over the light's, a third each (write_orphan's shares).
@@ -500,7 +503,7 @@ fn some_first_dielectric(corners: Corners, closed: bool) -> bool {
 }
 
 fn leaf_mask(c: Candidate, main: Corners) -> Leaf {
-    var leaf = Leaf(0u, 0u, 0u, 0.0);
+    var leaf = Leaf(0u, 0u, 0u, 0.0, 0u);
     if consistent(main) && corners_geometry(main).ok {
         if lands(main) {
             leaf.mask |= 1u;
@@ -509,6 +512,9 @@ fn leaf_mask(c: Candidate, main: Corners) -> Leaf {
         }
     } else if any_landed(main) {
         leaf.orphans |= 1u;
+        if CLIP_LEAVES {
+            leaf.clips |= clip_count(main);
+        }
     }
     // The generator all three corners meet first (NONE if they differ or one misses).
     // The reflected and internal families start there, whatever the main path does
@@ -526,7 +532,7 @@ fn leaf_mask(c: Candidate, main: Corners) -> Leaf {
     // its own path (path.wgsl checks its own first surface): traced, they land as
     // orphans. (Gating these on the shared generator alone lost them: sphere_on_plane
     // at 128x96, static-grid extended, orphans 4,132 -> 3,916, flux 0.979 -> 0.972.)
-    let orphans_only = u.splat_orphans == 1u && slot == NONE;
+    let orphans_only = (u.splat_orphans == 1u || CLIP_LEAVES) && slot == NONE;
     let reflected = u.reflections == 1u && ((slot != NONE
         && u.specular[slot].kind == MAT_DIELECTRIC)
         || (orphans_only && some_first_dielectric(main, false)));
@@ -548,6 +554,9 @@ fn leaf_mask(c: Candidate, main: Corners) -> Leaf {
             }
         } else if any_landed(k) {
             leaf.orphans |= 1u << family;
+            if CLIP_LEAVES {
+                leaf.clips |= clip_count(k) << (CLIP_BITS * family);
+            }
             if SPLIT_FAMILIES {
                 leaf.orphan_share += landed_share(k);
             }
@@ -880,7 +889,7 @@ fn decide(@builtin(global_invocation_id) id: vec3<u32>) {
     // leaf, a ranked split the budget may leave undone, split_families' test). Traced
     // from one place: lavapipe pays for every inlined copy of the path tracer in
     // every invocation, whether it runs or not.
-    var leaf = Leaf(0u, 0u, 0u, 0.0);
+    var leaf = Leaf(0u, 0u, 0u, 0.0, 0u);
     if s.reasons == 0u || ranked {
         leaf = leaf_mask(c, k);
     }
@@ -901,7 +910,7 @@ fn decide(@builtin(global_invocation_id) id: vec3<u32>) {
     if SPLIT_FAMILIES && refinable && s.reasons == 0u && (leaf.orphans & ~1u) != 0u {
         s.reasons |= SPLIT_FAMILY;
         s.priority = leaf.orphan_share * s.size_px / u.split_hit_px
-            * select(DROPPED_LIGHT_WEIGHT, 1.0, u.splat_orphans == 1u);
+            * select(DROPPED_LIGHT_WEIGHT, 1.0, u.splat_orphans == 1u || CLIP_LEAVES);
     }
     if s.reasons != 0u {
         if (s.reasons & SPLIT_DISCONTINUITY) != 0u { atomicAdd(&control[C_SPLIT_DISCONTINUITY], 1u); }
@@ -915,20 +924,23 @@ fn decide(@builtin(global_invocation_id) id: vec3<u32>) {
         }
         // Ranked: the leaf it would be, should the budget not reach it, and the
         // beams at stake in its split (what it emits as a leaf, at least one).
+        // A leaf that drops its main path ranks as the paper's would, clipped or not
+        // (CLIP_LEAVES: a clipped edge is a bisected chord, and the clipped beams ride
+        // along uncounted, `leaf_budget_cost`; ranking them as kept leaves and counting
+        // them, adaptive-beams' relMSE at 128x96 in all-methods' extended setting was
+        // 1.9x on sphere_over_water, 1.9x on water_pool and 2.9x on two_lenses).
         var priority = s.priority;
         if (leaf.mask & 1u) == 0u {
             priority = max(priority, DROPPED_LIGHT_WEIGHT * s.size_px / u.split_hit_px);
         }
         let bin = priority_bin(priority);
-        let beams = countOneBits(leaf.mask & BUDGET_FAMILIES);
+        let beams = leaf_budget_cost(leaf);
         atomicAdd(&control[C_LEAF_COST], beams);
         atomicAdd(&control[C_SPLIT_HISTOGRAM + bin], max(beams, 1u));
         store_size(id.x, s.size_px);
-        if u.splat_orphans == 1u {
-            offsets[id.x].z = leaf.orphans;
-        }
+        store_torn(id.x, leaf);
         actions[id.x] = ACTION_WANT | (bin << ACTION_BIN_SHIFT)
-            | (drop_reason(k, leaf.mask) << ACTION_DROP_SHIFT)
+            | (drop_reason(k, emitted(leaf)) << ACTION_DROP_SHIFT)
             | (min(leaf.no_receiver, 15u) << ACTION_NO_RECEIVER_SHIFT) | leaf.mask;
         return;
     }
@@ -937,14 +949,40 @@ fn decide(@builtin(global_invocation_id) id: vec3<u32>) {
 
 // A candidate that stays a leaf: its orphans, drops and (ranked) its beams' cost.
 fn finish_leaf(i: u32, k: Corners, leaf: Leaf, ranked: bool) {
-    if u.splat_orphans == 1u {
-        offsets[i].z = leaf.orphans;
-    }
-    count_drop(drop_reason(k, leaf.mask), leaf.no_receiver);
+    store_torn(i, leaf);
+    count_drop(drop_reason(k, emitted(leaf)), leaf.no_receiver);
     if ranked {
-        atomicAdd(&control[C_LEAF_COST], countOneBits(leaf.mask & BUDGET_FAMILIES));
+        atomicAdd(&control[C_LEAF_COST], leaf_budget_cost(leaf));
     }
     actions[i] = leaf.mask;
+}
+
+// What a leaf does with the families whose corners part ways, for scan and emit:
+// splat_orphans' family mask, or CLIP_LEAVES' clipped beams per family.
+fn store_torn(i: u32, leaf: Leaf) {
+    if u.splat_orphans == 1u {
+        offsets[i].z = leaf.orphans;
+    } else if CLIP_LEAVES {
+        offsets[i].z = leaf.clips;
+    }
+}
+
+// The families that reach the image as beams: bit f where family f emits its beam or
+// (CLIP_LEAVES) clipped beams.
+fn emitted(leaf: Leaf) -> u32 {
+    var mask = leaf.mask;
+    for (var family = 0u; family < FAMILY_INTERNAL + u.bounces; family++) {
+        if clipped_beams(leaf.clips, family) > 0u {
+            mask |= 1u << family;
+        }
+    }
+    return mask;
+}
+
+// The beams a leaf costs the budget: those of the counted families (BUDGET_FAMILIES).
+// Clipped beams (CLIP_LEAVES) ride along, as the internal reflections do.
+fn leaf_budget_cost(leaf: Leaf) -> u32 {
+    return countOneBits(leaf.mask & BUDGET_FAMILIES);
 }
 
 // With a beam budget, between decide and scan: the lowest priority bin whose splits
@@ -962,7 +1000,8 @@ fn budget() {
     // Beams of the counted families written at the coarser levels, and this level's
     // leaves' (BUDGET_FAMILIES).
     let written = atomicLoad(&control[C_BEAMS_PER_FAMILY + FAMILY_MAIN])
-        + atomicLoad(&control[C_BEAMS_PER_FAMILY + FAMILY_REFLECTED]);
+        + atomicLoad(&control[C_BEAMS_PER_FAMILY + FAMILY_REFLECTED])
+        - atomicLoad(&control[C_BEAMS_CLIPPED_BUDGET]);
     let used = written + atomicLoad(&control[C_LEAF_COST]);
     let left = max(i32(u.beam_budget) - i32(used), 0);
     var first_bin = SPLIT_BINS;
@@ -1006,10 +1045,13 @@ fn action_counts(i: u32) -> vec3<u32> {
         return vec3<u32>(4u, 0u, 0u);
     }
     var orphan_records = 0u;
+    var clipped = 0u;
     if u.splat_orphans == 1u {
         orphan_records = countOneBits(offsets[i].z);
+    } else if CLIP_LEAVES {
+        clipped = clipped_total(offsets[i].z);
     }
-    return vec3<u32>(0u, countOneBits(a), orphan_records);
+    return vec3<u32>(0u, countOneBits(a) + clipped, orphan_records);
 }
 
 // One workgroup: exclusive prefix sums of children, beams and orphan records over the
@@ -1246,7 +1288,9 @@ fn pack_tris(h: ptr<function, Hull>) -> vec4<u32> {
     return words;
 }
 
-fn write_beam(slot: u32, c: Candidate, k: Corners, family: u32) {
+// `lattice`: which corners are vertices of the grid's lattice (a clipped beam's corners
+// on its leaf's edges are not, and keep their beam's own irradiance).
+fn write_beam(slot: u32, c: Candidate, k: Corners, family: u32, lattice: vec3<bool>) {
     let g = corners_geometry(k);
     var b: Beam;
     let ends = end_heights(k, g);
@@ -1275,6 +1319,10 @@ fn write_beam(slot: u32, c: Candidate, k: Corners, family: u32) {
         // them with the corners' irradiance factors.
         var uv = array<vec2<f32>, 3>(c.uv01.xy, c.uv01.zw, c.uv2_level.xy);
         for (var i = 0u; i < 3u; i++) {
+            if !lattice[i] {
+                b.hull[i].w = bitcast<f32>(NONE);
+                continue;
+            }
             let entry = lattice_entry(uv[i]);
             b.hull[i].w = bitcast<f32>(entry);
             let r = vertex_list(entry, family);
@@ -1365,6 +1413,21 @@ fn emit(@builtin(global_invocation_id) id: vec3<u32>) {
             }
             slot += 1u;
         }
+        // CLIP_LEAVES: a job per clipped beam, its part (1-based) in the family word.
+        if CLIP_LEAVES && u.splat_orphans == 0u {
+            let parts = clipped_beams(off.z, family);
+            for (var part = 1u; part <= parts; part++) {
+                if slot < u.max_beams {
+                    beams[slot].v[0] = c.uv01;
+                    beams[slot].v[1] = vec4<f32>(job.xyz, f32(family + part * CLIP_PART));
+                    atomicAdd(&control[C_BEAMS_PER_LEVEL + min(level, MAX_LEVELS)], 1u);
+                    atomicAdd(&control[C_BEAMS_PER_FAMILY + min(family, FAMILY_INTERNAL + MAX_BOUNCES - 1u)], 1u);
+                    atomicAdd(&control[C_BEAMS_CLIPPED], 1u);
+                    atomicAdd(&control[C_BEAMS_CLIPPED_BUDGET], select(0u, 1u, family <= FAMILY_REFLECTED));
+                }
+                slot += 1u;
+            }
+        }
         if u.splat_orphans == 1u && (off.z & (1u << family)) != 0u {
             if orphan_slot < u.max_beams {
                 orphans[orphan_slot].point[0] = c.uv01;
@@ -1395,7 +1458,281 @@ fn emit_beams(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let j = job(beams[id.x].v[0], beams[id.x].v[1]);
-    write_beam(id.x, j.c, trace_corners(j.c, j.family), j.family);
+    let family = j.family % CLIP_PART;
+    let k = trace_corners(j.c, family);
+    if CLIP_LEAVES && j.family >= CLIP_PART {
+        let clipped = clip_leaf(j.c, k, family, j.family / CLIP_PART - 1u);
+        if corners_geometry(clipped.k).ok {
+            write_beam(id.x, clipped.c, clipped.k, family, clipped.lattice);
+            return;
+        }
+        let moved = rebased(clipped.k);
+        if corners_geometry(moved.k).ok && moved.ahead {
+            write_beam(id.x, clipped.c, moved.k, family, clipped.lattice);
+            atomicAdd(&control[C_BEAMS_REBASED], 1u);
+            return;
+        }
+        let landing = landing_beam(clipped.k);
+        if corners_geometry(landing.k).ok && landing.ahead {
+            write_beam(id.x, clipped.c, landing.k, family, clipped.lattice);
+            atomicAdd(&control[C_BEAMS_LANDING], 1u);
+            return;
+        }
+        write_empty_beam(id.x, k.p[0].origin, family);
+        return;
+    }
+    write_beam(id.x, j.c, k, family, vec3<bool>(true));
+}
+
+// Clipped leaves (CLIP_LEAVES, beyond the paper: Sect. 4.1 omits "invalid triangles
+// crossing the silhouettes", and refinement only narrows them). A leaf whose corners
+// part ways for a family keeps that family's light where its corners agree: each
+// group of corners on one path (same objects met, same receiver) emits the part of
+// the triangle around it, bounded on the edges to the other corners by the last point
+// of the group's path that CLIP_STEPS bisections find. A pair of corners bounds a
+// quad (two beams, one bisected point shared), a corner alone a triangle. The light
+// between the bisected points of different groups (1/2^CLIP_STEPS of each edge, and
+// the strip their chords cut across the triangle) stays lost; a group's path may turn
+// into another inside its part, which a beam cannot see, as in any leaf.
+override CLIP_LEAVES: bool;
+const CLIP_STEPS: u32 = 6u;
+// A job's family word is family + part · CLIP_PART, part 1..=3 for a clipped beam
+// (0: the leaf's whole beam); families are below 16 (FAMILY_INTERNAL + MAX_BOUNCES).
+const CLIP_PART: u32 = 16u;
+
+// Corners a and b follow one path: both valid, the same objects and receiver.
+fn same_path(a: PathEnd, b: PathEnd) -> bool {
+    return a.valid && b.valid && a.signature == b.signature && a.end_object == b.end_object;
+}
+
+// A corner whose light reaches the image (a receiver, or anywhere in a medium).
+fn corner_lands(p: PathEnd) -> bool {
+    return p.valid && (u.sigma_t.w > 0.5 || p.end_object != NONE);
+}
+
+// The clipped beams of a family whose corners part ways: two for a pair on one path
+// (a quad), one for each corner alone, none for a corner whose light lands nowhere;
+// corners that agree (a leaf that lost its beam to its geometry) make one, the leaf.
+fn clip_count(k: Corners) -> u32 {
+    let p0 = k.p[0];
+    let p1 = k.p[1];
+    let p2 = k.p[2];
+    let s01 = same_path(p0, p1);
+    let s12 = same_path(p1, p2);
+    let s20 = same_path(p2, p0);
+    if s01 && s12 {
+        // The corners agree, and the leaf lost its beam to its geometry: one beam,
+        // the whole leaf, rebased (`rebased`).
+        return u32(corner_lands(p0));
+    }
+    if s01 {
+        return 2u * u32(corner_lands(p0)) + u32(corner_lands(p2));
+    }
+    if s12 {
+        return 2u * u32(corner_lands(p1)) + u32(corner_lands(p0));
+    }
+    if s20 {
+        return 2u * u32(corner_lands(p2)) + u32(corner_lands(p1));
+    }
+    return u32(corner_lands(p0)) + u32(corner_lands(p1)) + u32(corner_lands(p2));
+}
+
+// Clipped beams of `family` in a leaf's packed counts: CLIP_BITS per family (at most
+// 3 beams, FAMILY_INTERNAL + MAX_BOUNCES families in 20 bits).
+const CLIP_BITS: u32 = 2u;
+fn clipped_beams(clips: u32, family: u32) -> u32 {
+    return (clips >> (CLIP_BITS * family)) & 3u;
+}
+
+fn clipped_total(clips: u32) -> u32 {
+    var total = 0u;
+    for (var family = 0u; family < FAMILY_INTERNAL + u.bounces; family++) {
+        total += clipped_beams(clips, family);
+    }
+    return total;
+}
+
+// The last point of `inside`'s path on the edge from uv_in towards uv_out: CLIP_STEPS
+// bisections, each a trace of the family's path (not the vertex cache: these points
+// lie off its lattice).
+struct ClipPoint {
+    uv: vec2<f32>,
+    p: PathEnd,
+}
+
+fn clip_edge(uv_in: vec2<f32>, uv_out: vec2<f32>, inside: PathEnd, family: u32) -> ClipPoint {
+    var lo = 0.0;
+    var hi = 1.0;
+    var p = inside;
+    for (var step = 0u; step < CLIP_STEPS; step++) {
+        let t = 0.5 * (lo + hi);
+        let m = trace_path(mix(uv_in, uv_out, t), family);
+        if same_path(m, inside) {
+            lo = t;
+            p = m;
+        } else {
+            hi = t;
+        }
+    }
+    return ClipPoint(mix(uv_in, uv_out, lo), p);
+}
+
+struct Clipped {
+    c: Candidate,
+    k: Corners,
+    lattice: vec3<bool>,
+}
+
+// Clipped beam `part` (0-based, in clip_count's order) of a leaf whose corners `k` of
+// `family` part ways. Each of its corners is a leaf corner (inner == outer) or the
+// clipped point on the edge from corner inner towards corner outer; corners keep the
+// leaf's winding.
+fn clip_leaf(c: Candidate, corners: Corners, family: u32, part: u32) -> Clipped {
+    var k = corners;
+    var uv = array<vec2<f32>, 3>(c.uv01.xy, c.uv01.zw, c.uv2_level.xy);
+    let s01 = same_path(k.p[0], k.p[1]);
+    let s12 = same_path(k.p[1], k.p[2]);
+    let s20 = same_path(k.p[2], k.p[0]);
+    // Each corner of the part: (inner, outer).
+    var spec = array<vec2<u32>, 3>(vec2<u32>(0u, 0u), vec2<u32>(1u, 1u), vec2<u32>(2u, 2u));
+    if s01 && s12 {
+        // The whole leaf (clip_count).
+    } else if s01 || s12 || s20 {
+        // The pair (a, a + 1) and the corner alone, b.
+        let a = select(select(2u, 1u, s12), 0u, s01);
+        let a1 = (a + 1u) % 3u;
+        let b = (a + 2u) % 3u;
+        var q = part;
+        if !corner_lands(k.p[a]) {
+            q += 2u;
+        }
+        if q == 0u {
+            spec = array<vec2<u32>, 3>(vec2<u32>(a, a), vec2<u32>(a1, a1), vec2<u32>(a1, b));
+        } else if q == 1u {
+            spec = array<vec2<u32>, 3>(vec2<u32>(a, a), vec2<u32>(a1, b), vec2<u32>(a, b));
+        } else {
+            spec = array<vec2<u32>, 3>(vec2<u32>(b, b), vec2<u32>(b, a), vec2<u32>(b, a1));
+        }
+    } else {
+        // Each landed corner alone, in corner order.
+        var i = 0u;
+        var seen = 0u;
+        for (var j = 0u; j < 3u; j++) {
+            if corner_lands(k.p[j]) {
+                if seen == part {
+                    i = j;
+                }
+                seen += 1u;
+            }
+        }
+        spec = array<vec2<u32>, 3>(vec2<u32>(i, i), vec2<u32>(i, (i + 1u) % 3u), vec2<u32>(i, (i + 2u) % 3u));
+    }
+    var out: Clipped;
+    var out_uv: array<vec2<f32>, 3>;
+    for (var v = 0u; v < 3u; v++) {
+        let inner = spec[v].x;
+        let outer = spec[v].y;
+        out.lattice[v] = inner == outer;
+        if inner == outer {
+            out_uv[v] = uv[inner];
+            out.k.p[v] = k.p[inner];
+        } else {
+            let e = clip_edge(uv[inner], uv[outer], k.p[inner], family);
+            out_uv[v] = e.uv;
+            out.k.p[v] = e.p;
+        }
+    }
+    out.c = Candidate(vec4<f32>(out_uv[0], out_uv[1]), vec4<f32>(out_uv[2], c.uv2_level.zw));
+    return out;
+}
+
+// A clipped beam's base is where its corners' paths leave the last specular surface;
+// at a silhouette or a fold those points can lie edge-on to the light (a corner's
+// direction along or across the base plane: no beam space, Ernst et al.'s heights
+// must be positive). The same rays then start on the plane across their mean
+// direction through the corner furthest along it (each origin moved forward along its
+// own ray, t_end shortened alike): the beam is the same bundle from there on, and
+// `ahead` says every corner still meets that plane before its receiver. Of
+// sphere_on_plane's clipped main-path beams at 128x96 (static-grid, tracer=bvh,
+// reflections=false) 315 of 645 had no beam space at their exit points, 248 of them
+// with a direction across the base plane. Of the glass cushion's 22,598 (8 bounces)
+// 4,725 are rebased, 1,236 drawn as landing triangles (`landing_beam`) and 1,550
+// empty, all of those with zero flux (no bisected point of their group's path left
+// their corner).
+struct Rebased {
+    k: Corners,
+    ahead: bool,
+}
+
+fn rebased(corners: Corners) -> Rebased {
+    var r = Rebased(corners, true);
+    let sum = r.k.p[0].dir + r.k.p[1].dir + r.k.p[2].dir;
+    if dot(sum, sum) < 1e-12 {
+        r.ahead = false;
+        return r;
+    }
+    let m = normalize(sum);
+    let plane = max(max(dot(r.k.p[0].origin, m), dot(r.k.p[1].origin, m)), dot(r.k.p[2].origin, m));
+    for (var i = 0u; i < 3u; i++) {
+        let along = dot(r.k.p[i].dir, m);
+        if along <= 0.0 {
+            r.ahead = false;
+            return r;
+        }
+        let s = (plane - dot(r.k.p[i].origin, m)) / along;
+        r.k.p[i].origin += s * r.k.p[i].dir;
+        r.k.p[i].t_end -= s;
+        r.ahead = r.ahead && r.k.p[i].t_end > 0.0;
+    }
+    return r;
+}
+
+// Where even the rebased rays admit no beam space (they spread over more than a
+// half-space, or cross before the plane), the light still lands where the corners land:
+// the beam is then the landing triangle's, the three corners lifted off their landing
+// points against the rays' mean direction by the triangle's size and sent back down
+// along it, so its flux lands on the triangle of the corners' landings (ΔΦ/ΔA there,
+// as the caustic triangles method draws it). Its in-scattered light is not the true
+// rays', so in a medium each corner's flux takes the extinction of the way it skips.
+fn landing_beam(corners: Corners) -> Rebased {
+    var r = Rebased(corners, false);
+    let sum = r.k.p[0].dir + r.k.p[1].dir + r.k.p[2].dir;
+    if dot(sum, sum) < 1e-12 || r.k.p[0].end_object == NONE {
+        return r;
+    }
+    let m = normalize(sum);
+    let l0 = r.k.p[0].origin + r.k.p[0].dir * r.k.p[0].t_end;
+    let l1 = r.k.p[1].origin + r.k.p[1].dir * r.k.p[1].t_end;
+    let l2 = r.k.p[2].origin + r.k.p[2].dir * r.k.p[2].t_end;
+    let lift = max(max(distance(l0, l1), distance(l1, l2)), max(distance(l2, l0), 1e-4));
+    let land = array<vec3<f32>, 3>(l0, l1, l2);
+    for (var i = 0u; i < 3u; i++) {
+        r.k.p[i].weight *= extinction(max(r.k.p[i].t_end - lift, 0.0));
+        r.k.p[i].origin = land[i] - lift * m;
+        r.k.p[i].dir = m;
+        r.k.p[i].t_end = lift;
+    }
+    r.ahead = true;
+    return r;
+}
+
+// A clipped beam too thin for a beam space (corners on a line, or an edge direction
+// in its base plane): no light, a hull that covers no pixel, and no lattice corners.
+fn write_empty_beam(slot: u32, at: vec3<f32>, family: u32) {
+    var b: Beam;
+    let up = vec3<f32>(0.0, 1.0, 0.0);
+    b.v = array<vec4<f32>, 3>(vec4<f32>(at, 1.0), vec4<f32>(at, 0.0), vec4<f32>(at, 0.0));
+    b.d = array<vec4<f32>, 3>(vec4<f32>(up, 0.0), vec4<f32>(up, 0.0), vec4<f32>(up, 0.0));
+    b.flux = array<vec4<f32>, 3>(vec4<f32>(0.0, 0.0, 0.0, f32(family)), vec4<f32>(0.0), vec4<f32>(0.0));
+    b.n = vec4<f32>(up, 0.0);
+    let none = bitcast<f32>(NONE);
+    b.hull = array<vec4<f32>, 6>(vec4<f32>(at, none), vec4<f32>(at, none), vec4<f32>(at, none),
+                                 vec4<f32>(at, 1.0), vec4<f32>(at, 1.0), vec4<f32>(at, 1.0));
+    b.tris = vec4<u32>(0u);
+    beams[slot] = b;
+    // Counted with the prisms (hulls_tight + hulls_prism = beams) and on its own.
+    atomicAdd(&control[C_PRISM], 1u);
+    atomicAdd(&control[C_BEAMS_CLIPPED_EMPTY], 1u);
 }
 
 // With splat_orphans, after the last level, one invocation per orphan record: the
@@ -1474,7 +1811,11 @@ fn vertex_irradiance(@builtin(global_invocation_id) id: vec3<u32>) {
     let own = beam_landing(slot);
     var factor = vec3<f32>(1.0);
     for (var i = 0u; i < 3u; i++) {
-        let r = vertex_list(bitcast<u32>(beams[slot].hull[i].w), family);
+        let entry = bitcast<u32>(beams[slot].hull[i].w);
+        if entry == NONE {
+            continue;
+        }
+        let r = vertex_list(entry, family);
         let n = min(atomicLoad(&control[r]), VERTEX_LIST_SLOTS);
         // The listed beams in slot order, so that the sums, and the image, are the
         // same on every run whatever order `emit_beams` listed them in.

@@ -90,7 +90,14 @@
 //!   beams' prefix sum) and draws them as one-pixel points (with `orphan_kernel_px`,
 //!   Gaussians of that many pixels: frame.wgsl's point kernel) into the raw surface
 //!   caustic before the filter (`orphans.wgsl`); in a medium their in-scattered light
-//!   stays lost.
+//!   stays lost. `clip_leaves` keeps that light in beams instead: each group of the
+//!   leaf's corners on one path (same objects, same receiver) emits the part of the
+//!   triangle around it, its edges to the other corners cut where 6 bisections find
+//!   the group's path ending (a quad of two beams for a pair, a triangle for a corner
+//!   alone), traced in `emit_beams`; a clipped beam whose exit points admit no beam
+//!   space (at a silhouette the exit points lie edge-on to the light) starts where its
+//!   rays cross the plane across their mean direction (generate.wgsl `clip_leaf`,
+//!   `rebased`).
 //! - `raster` = compute (issue 17) replaces the hull rasterization by a compute pass of
 //!   the same name (`rasterize_compute.wgsl`): the workgroups of a beam clip its hull at
 //!   the camera plane, find the convex polygon it projects to and shade the pixels
@@ -1000,6 +1007,7 @@ impl BeamMethod {
                     "SPLIT_FAMILIES",
                     f64::from(u8::from(config.refinement.split_families)),
                 ),
+                ("CLIP_LEAVES", f64::from(u8::from(config.beams.clip_leaves))),
                 ("VERTEX_CACHE", f64::from(u8::from(vertex_cache_side > 0))),
                 ("CACHE_REFLECTED", f64::from(u8::from(cache_reflected))),
                 ("FAMILY_TRACER", f64::from(u8::from(family_tracer))),
@@ -1444,6 +1452,16 @@ impl CausticsMethod for BeamMethod {
         // the paper's (and the regression baselines').
         if !self.config.beams.splat_orphans {
             for name in ["orphans", "overflow_orphans", "orphan_corners"] {
+                out.remove(name);
+            }
+        }
+        if !self.config.beams.clip_leaves {
+            for name in [
+                "beams_clipped",
+                "beams_clipped_empty",
+                "beams_clipped_rebased",
+                "beams_clipped_landing",
+            ] {
                 out.remove(name);
             }
         }
